@@ -1,0 +1,26 @@
+// Builds the particles and constraints of a scene: the rows x cols cloth grid (structural and shear
+// stretch constraints, bending hinges, triangles) and the granular particles.
+#pragma once
+
+#include "pbd_cloth/particles.h"
+#include "pbd_cloth/scene_config.h"
+
+namespace pbd_cloth {
+
+// Rotation of the grid from cloth.rpy (roll about x, then pitch about y, then yaw about z).
+Eigen::Matrix3d rotationFromRpy(const Eigen::Vector3d& rpy);
+
+// Fills `particles` (cloth grid, then granular lattice) and `topology` from the scene. Pinned
+// particles get inverse mass 0.
+void buildScene(const SceneConfig& scene, Particles& particles, ClothTopology& topology);
+
+// Isometric bending hinge on edge (x0,x1) with opposite vertices x2, x3, from rest positions.
+// Returns false for a degenerate (zero-area) hinge, which is then skipped.
+bool makeBendConstraint(const Vec3Array& rest, int i0, int i1, int i2, int i3, BendConstraint& out);
+
+// Long-range attachments from every free cloth particle to every kinematic cloth particle, with the
+// rest (geodesic on the flat grid) distance as the maximum length.
+void buildTethers(const Particles& particles, const ClothTopology& topology, double spacing,
+                  std::vector<Tether>& tethers);
+
+}  // namespace pbd_cloth

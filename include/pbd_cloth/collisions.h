@@ -1,0 +1,123 @@
+// Contact constraints of the collision seed, projected inside the solver loop as unilateral
+// constraints C >= 0 (never as a post-pass): the bounds box (seed 000, C1), obstacles (plane,
+// sphere, box, capsule; static or moving) with friction, particle-particle contact and
+// vertex-triangle self-collision with thickness.
+//
+// The step, as the solver drives it:
+//   beginStep         broad phase once per step (swept boxes, spatial hash, flat candidate arrays)
+//                     and pre-stabilisation of overlaps that exist before the step
+//   setSubstepFraction  obstacles at their interpolated poses for the substep
+//   project           once per constraint pass: particle-particle, vertex-triangle, obstacles, bounds
+//                     (obstacles and bounds last, so a pass ends free of penetration into them)
+//   endStep           obstacles arrive at their targets
+//
+// No tunnelling, and how:
+// - Obstacles: continuous. Each pass sweeps the particle's sphere along its substep path in the
+//   obstacle's frame (from substep_start under the substep's begin pose to the position under its
+//   end pose; shapes.h sweepSphere). If the path enters the shape and the end point's nearest face
+//   is not the one it entered by (a thin plate crossed, a box corner cut), the particle is
+//   projected onto the tangent plane at the entry point, i.e. back to the side it came from;
+//   otherwise onto the nearest surface. A moving obstacle therefore sweeps particles along however
+//   fast it moves, and a particle of any speed never passes a plate of any thickness.
+// - Particles and cloth: the broad phase bounds each particle's motion over the step by its swept
+//   box (step-start position to the unconstrained prediction x + v dt + g dt^2, grown by half its
+//   radius); every substep checks that the particles stayed in their boxes and repeats the broad
+//   phase for the rest of the step if one did not, so no contact is missed. The vertex-triangle
+//   constraint keeps each vertex on the side of the triangle it was on at the step start, so a
+//   vertex pushed through a cloth layer is pulled back, never out of the far side.
+// - Initial overlaps: an overlap already present at a substep start (deeper than a slop) is only
+//   kept from growing; it is removed by pre-stabilisation at the next step start, at most
+//   max_separation_speed * dt per step, on positions before the prediction, so the separation adds
+//   no velocity and overlapping particles never pop apart.
+#pragma once
+
+#include <vector>
+
+#include "pbd_cloth/contact.h"
+#include "pbd_cloth/particle_contacts.h"
+#include "pbd_cloth/particles.h"
+#include "pbd_cloth/scene_config.h"
+#include "pbd_cloth/self_collision.h"
+#include "pbd_cloth/shapes.h"
+
+namespace pbd_cloth {
+
+// Figures of the last step.
+struct CollisionStats {
+  int particle_pairs = 0;         // particle-particle candidates
+  int vertex_triangle_pairs = 0;  // self-collision candidates
+  int broad_phase_runs = 0;       // 1, plus one per substep whose particles left their swept boxes
+};
+
+class Collisions {
+ public:
+  // Reads bounds, friction, thickness, self_collision, gravity (for the motion bound) and obstacles.
+  void configure(const SceneConfig& scene);
+  void setFriction(const FrictionConfig& friction) { friction_ = friction; }
+  // An obstacle moves from its current pose to `target` over the next step (a kinematic body).
+  // A non-finite target is refused (returns false) and the obstacle keeps its course.
+  bool setObstacleTarget(int obstacle, const Pose& target);
+  const std::vector<ObstacleConfig>& obstacles() const { return obstacles_; }
+  // Sizes every buffer (called once the particles exist) and finds the contacts of the initial
+  // state, so maxPenetration() is right before the first step.
+  void prepare(const Particles& particles, const ClothTopology& topology);
+
+  // Once per step, before the substeps. Moves particles only to pre-stabilise initial overlaps
+  // (and then sets step_start to the result).
+  void beginStep(Particles& particles, const ClothTopology& topology, double dt);
+  // Obstacles at fractions [s_begin, s_end] of the step for the next substep.
+  void setSubstepFraction(double s_begin, double s_end);
+  // One pass over every contact constraint; returns the largest position change.
+  double project(Particles& particles, const ClothTopology& topology);
+  // Ends the step: obstacles arrive at their targets.
+  void endStep();
+
+  // Deepest violation of any contact constraint in the current positions (m): particle inside an
+  // obstacle (radius minus distance), particle pair overlap, vertex closer than h to a triangle.
+  double maxPenetration(const Particles& particles, const ClothTopology& topology) const;
+
+  const CollisionStats& stats() const { return stats_; }
+  // Largest speed at which pre-existing overlaps are separated (m/s), 1 by default.
+  void setMaxSeparationSpeed(double speed) { max_separation_speed_ = speed; }
+
+ private:
+  void computeSweptBoxes(const Particles& particles, double time_left);
+  void findCandidates(const Particles& particles, const ClothTopology& topology);
+  bool leftSweptBoxes(const Particles& particles) const;
+  void preStabilizeObstacles(Particles& particles, double max_shift) const;
+  double projectObstacles(Particles& particles);
+  double projectBounds(Particles& particles) const;
+  bool particleContactsActive(const Particles& particles) const;
+  bool selfCollisionActive(const ClothTopology& topology) const;
+
+  BoundsConfig bounds_;
+  FrictionConfig friction_;
+  double thickness_ = 0.005;
+  bool self_collision_ = false;
+  Vec3 gravity_ = Vec3(0.0, 0.0, -9.81);
+  double max_separation_speed_ = 1.0;
+
+  // Obstacles: configuration and pose at the end of the last step, target of this step, and the
+  // local shapes and frames of the current substep.
+  std::vector<ObstacleConfig> obstacles_;
+  std::vector<Pose> obstacle_targets_;
+  std::vector<Shape> shapes_;
+  std::vector<Frame> frame_begin_;
+  std::vector<Frame> frame_end_;
+  std::vector<ContactState> obstacle_contacts_;  // [particle * obstacles + obstacle]
+
+  // Step and substep.
+  double dt_ = 0.0;
+  double substep_begin_ = 0.0;
+  int substep_ = 0;          // stamp of the current substep (ContactState::substep)
+  int checked_substep_ = -1;  // substep whose particles were checked against their swept boxes
+
+  // Broad phase of the step.
+  Vec3Array box_lo_;  // swept box of each particle over the (rest of the) step
+  Vec3Array box_hi_;
+  ParticleContacts particle_contacts_;
+  SelfCollision self_collision_pairs_;
+  CollisionStats stats_;
+};
+
+}  // namespace pbd_cloth

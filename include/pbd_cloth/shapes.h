@@ -1,0 +1,57 @@
+// Geometry of the obstacles: the signed distance of a point to a plane, sphere, box or capsule in
+// the shape's own frame, and a swept-sphere query for continuous collision handling. Plain structs
+// and a switch on the shape type: no virtual calls in the contact loop.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "pbd_cloth/particles.h"
+#include "pbd_cloth/scene_config.h"
+
+namespace pbd_cloth {
+
+// An obstacle in its own frame. Sphere: centre at the origin. Capsule: the segment from
+// (0,0,-half_length) to (0,0,half_length) inflated by radius (local z axis, like rviz's cylinder).
+// Box: centred at the origin with these half edge lengths. Plane: normal.x = offset with a unit
+// normal; the free side is normal.x - offset >= 0 (the seed's C(p) = n^T p - d_rest >= 0).
+struct Shape {
+  ShapeType type = ShapeType::kSphere;
+  double radius = 0.0;
+  double half_length = 0.0;
+  Vec3 half_extents = Vec3::Zero();
+  Vec3 normal = Vec3::UnitZ();
+  double offset = 0.0;
+};
+
+// Builds the local shape of an obstacle. The plane's normal is normalised together with its offset
+// so that n.p - offset stays the same plane and becomes a true (1-Lipschitz) distance.
+Shape makeShape(const ObstacleConfig& obstacle);
+
+// A rigid placement: world = rotation * local + translation.
+struct Frame {
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
+  Vec3 translation = Vec3::Zero();
+
+  Vec3 toLocal(const Vec3& x) const { return rotation.transpose() * (x - translation); }
+  Vec3 toWorld(const Vec3& x) const { return rotation * x + translation; }
+};
+
+Frame frameFromPose(const Pose& pose);
+// Pose at fraction s of the motion a -> b: linear position, slerp orientation.
+Frame interpolateFrame(const Pose& a, const Pose& b, double s);
+
+// Signed distance of the local point x to the surface (negative inside) and the outward unit
+// normal of the nearest surface point (inside: the direction of the shortest way out). The distance
+// is exact for all four shapes, hence 1-Lipschitz, which sweepSphere relies on.
+double signedDistance(const Shape& shape, const Vec3& x, Vec3& normal);
+double signedDistance(const Shape& shape, const Vec3& x);
+
+// Continuous collision: the first fraction t in [0, 1] at which a sphere of radius r moving along
+// the segment a -> b (local frame) touches the shape, i.e. signedDistance(a + t (b - a)) <= r.
+// Sphere tracing (Hart 1996): a step of (distance - r) never crosses the surface because the
+// distance is 1-Lipschitz, so a segment that crosses a thin plate is always caught. Returns false
+// when the whole segment stays free (or, for a grazing path, when the march does not converge).
+bool sweepSphere(const Shape& shape, const Vec3& a, const Vec3& b, double r, double& t);
+
+}  // namespace pbd_cloth

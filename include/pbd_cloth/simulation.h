@@ -1,0 +1,106 @@
+// A whole scene in motion: the particles and constraints built from a SceneConfig, the solver, the
+// grippers (scripted trajectory or live poses, grasp and release) and the obstacles. ROS-free: the
+// node and cloth_bench both drive this class, so a scene replays offline exactly as in the node.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "pbd_cloth/metrics.h"
+#include "pbd_cloth/particles.h"
+#include "pbd_cloth/scene_config.h"
+#include "pbd_cloth/solver.h"
+
+namespace pbd_cloth {
+
+struct GraspResult {
+  bool success = false;
+  std::string message;
+  int grasped_count = 0;
+};
+
+class Simulation {
+ public:
+  // Validates the scene (throws ConfigError) and builds the initial state.
+  explicit Simulation(const SceneConfig& scene);
+
+  // Back to the initial state (time 0, initial positions, nothing grasped, trajectories restart).
+  void reset();
+
+  // Advances by one step of 1/step_rate s.
+  void step() { step(1.0 / scene_.step_rate); }
+  void step(double dt);
+
+  double time() const { return time_; }
+  const SceneConfig& scene() const { return scene_; }
+  const Particles& particles() const { return particles_; }
+  // Direct access for tools and tests that set up a disturbance (a kick, an initial overlap).
+  Particles& mutableParticles() { return particles_; }
+  const ClothTopology& topology() const { return topology_; }
+  const StepStats& stats() const { return solver_.stats(); }
+  const Solver& solver() const { return solver_; }
+
+  // Indices of the particles that are pinned or grasped right now, written into `out`.
+  void kinematicIndices(std::vector<unsigned>& out) const;
+
+  // Grippers. Index -1 means "no such gripper".
+  int gripperIndex(const std::string& name) const;
+  int gripperCount() const { return static_cast<int>(grippers_.size()); }
+  const std::string& gripperName(int gripper) const;
+  // The pose the gripper reaches at the end of the next step. A live pose stops its trajectory.
+  void setGripperPose(int gripper, const Pose& pose);
+  const Pose& gripperPose(int gripper) const;
+  bool gripperGrasping(int gripper) const;
+  GraspResult setGrasp(int gripper, bool grasp);
+  // Force (N) the cloth pulls on the gripper, from the constraint corrections of the last step.
+  Eigen::Vector3d gripperForce(int gripper) const;
+
+  // Obstacles. Index -1 means "no such obstacle".
+  int obstacleIndex(const std::string& name) const;
+  int obstacleCount() const { return static_cast<int>(collisions_.obstacles().size()); }
+  // The obstacle as it stands now (pose at the end of the last step).
+  const ObstacleConfig& obstacle(int obstacle) const { return collisions_.obstacles()[obstacle]; }
+  // The pose the obstacle reaches at the end of the next step (moved as a kinematic body).
+  void setObstaclePose(int obstacle, const Pose& pose);
+
+  // Live tuning: applied at the next step. Throws ConfigError on an invalid value.
+  void setSolverConfig(const SolverConfig& solver);
+  void setClothCompliance(double stretch_compliance, double bend_compliance);
+  void setFriction(const FrictionConfig& friction);
+
+  // Accuracy metrics of the current state (strain, penetration, self-intersections, energy).
+  Metrics computeMetrics() const;
+
+ private:
+  struct GripperState {
+    Pose pose;             // pose at the end of the last step
+    Pose target;           // pose at the end of the next step
+    bool live = false;     // a pose message arrived: the trajectory is no longer followed
+    bool grasping = false;
+    std::vector<int> grasped;                    // particle indices
+    std::vector<Eigen::Vector3d> local_offsets;  // grasped particle positions in the gripper frame
+    Eigen::Vector3d velocity = Eigen::Vector3d::Zero();
+    std::size_t next_waypoint = 0;               // first waypoint whose grasp event is pending
+  };
+
+  void build();
+  void followTrajectories(double t_end);
+  void updateKinematicTargets(double dt);
+  void releaseGrasp(GripperState& gripper);
+  void kinematicSetChanged();
+
+  SceneConfig scene_;
+  Particles particles_;
+  Particles initial_particles_;
+  ClothTopology topology_;
+  Solver solver_;
+  Collisions collisions_;
+  std::vector<GripperState> grippers_;
+  double time_ = 0.0;
+};
+
+// Pose interpolation used by trajectories and substeps: linear position, slerp orientation.
+Pose interpolate(const Pose& a, const Pose& b, double s);
+
+}  // namespace pbd_cloth

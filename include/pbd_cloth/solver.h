@@ -1,0 +1,77 @@
+// The time step of the seeds: predict, find contacts, project constraints (relaxation), update
+// velocities. One class serves the four methods; all buffers are allocated in prepare(), so a step
+// allocates nothing.
+#pragma once
+
+#include <vector>
+
+#include "pbd_cloth/collisions.h"
+#include "pbd_cloth/particles.h"
+#include "pbd_cloth/scene_config.h"
+
+namespace pbd_cloth {
+
+struct StepStats {
+  double sim_time = 0.0;        // s
+  double step_wall_time = 0.0;  // s, last step
+  int substeps = 0;
+  int iterations = 0;  // constraint passes run in the last step, all substeps
+  double max_strain = 0.0;
+  double mean_strain = 0.0;
+  double max_penetration = 0.0;  // m
+  // Time per phase of the last step (s): predict, collide (broad phase), project, update.
+  double predict_time = 0.0;
+  double collide_time = 0.0;
+  double project_time = 0.0;
+  double update_time = 0.0;
+};
+
+class Solver {
+ public:
+  void configure(const SolverConfig& solver, const ClothConfig& cloth);
+  const SolverConfig& config() const { return config_; }
+  // Sizes every buffer for these particles and constraints; call after the topology changes.
+  void prepare(const Particles& particles, const ClothTopology& topology);
+  // Gives Verlet its exact start (x_prev = x0 - v0 h + g h^2 / 2, REFERENCE_CASES.md case 1).
+  void initializeVelocities(Particles& particles, double dt) const;
+
+  // Advances the particles by dt. Kinematic particles move from kinematic_from to kinematic_to,
+  // interpolated across substeps.
+  void step(double dt, Particles& particles, const ClothTopology& topology, Collisions& collisions);
+
+  const StepStats& stats() const { return stats_; }
+  StepStats& mutableStats() { return stats_; }
+  // Sum over the last step of the stretch and tether corrections that acted on particle i divided
+  // by h^2 and times its partner's mass: the constraint force on a kinematic particle (N).
+  const Vec3Array& constraintForce() const { return constraint_force_; }
+
+ private:
+  void predict(double h, double s_end, Particles& p);
+  double projectPass(double h, Particles& p, const ClothTopology& topology, Collisions& collisions,
+                     bool first_pass);
+  double projectStretch(double h, Particles& p, const ClothTopology& topology);
+  double projectBend(double h, Particles& p, const ClothTopology& topology);
+  double projectTethers(Particles& p, const ClothTopology& topology);
+  void applyJacobi(Particles& p, double& max_change);
+  void updateVelocities(double h, Particles& p);
+  void massSpringSubstep(double h, double s_end, Particles& p, const ClothTopology& topology,
+                         Collisions& collisions);
+  double pbdStiffness(double k) const;
+  double dampingFactor(double h) const;
+  void countJacobiConstraints(const Particles& p, const ClothTopology& topology);
+  double jacobiScale(int i, int j) const;
+
+  SolverConfig config_;
+  double stretch_compliance_ = 0.0;
+  double bend_compliance_ = -1.0;
+  std::vector<double> stretch_lambda_;  // XPBD multipliers, reset every substep
+  std::vector<double> bend_lambda_;
+  Vec3Array jacobi_delta_;         // Jacobi: summed corrections per particle
+  std::vector<int> jacobi_count_;  // Jacobi: stretch and bend constraints on each free particle
+  Vec3Array force_;                // mass_spring: force accumulator
+  Vec3Array predicted_;            // x~ = x_prev + h v~ of the current substep (free particles)
+  Vec3Array constraint_force_;
+  StepStats stats_;
+};
+
+}  // namespace pbd_cloth

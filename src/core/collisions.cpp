@@ -1,0 +1,303 @@
+#include "pbd_cloth/collisions.h"
+
+#include <algorithm>
+#include <climits>
+#include <cmath>
+
+namespace pbd_cloth {
+
+namespace {
+
+// An overlap at the substep start deeper than this fraction of the contact distance counts as
+// pre-existing: kept from growing, removed by pre-stabilisation (ContactState::allowance).
+// Residual overlaps of converging contacts (a stack under load) stay far below it.
+constexpr double kOverlapSlop = 0.02;
+// Swept boxes grow by this fraction of the particle radius to absorb the difference between the
+// unconstrained prediction and the constrained motion.
+constexpr double kBoxSlack = 0.5;
+
+}  // namespace
+
+void Collisions::configure(const SceneConfig& scene) {
+  bounds_ = scene.bounds;
+  friction_ = scene.cloth.friction;
+  thickness_ = scene.cloth.thickness;
+  self_collision_ = scene.cloth.self_collision;
+  gravity_ = scene.solver.gravity;
+  obstacles_ = scene.obstacles;
+  obstacle_targets_.clear();
+  shapes_.clear();
+  frame_begin_.clear();
+  for (const auto& obstacle : obstacles_) {
+    obstacle_targets_.push_back(obstacle.pose);
+    shapes_.push_back(makeShape(obstacle));
+    frame_begin_.push_back(frameFromPose(obstacle.pose));
+  }
+  frame_end_ = frame_begin_;
+}
+
+bool Collisions::setObstacleTarget(int obstacle, const Pose& target) {
+  if (!target.position.allFinite() || !target.orientation.coeffs().allFinite() ||
+      target.orientation.norm() == 0.0) {
+    return false;
+  }
+  obstacle_targets_[obstacle].position = target.position;
+  obstacle_targets_[obstacle].orientation = target.orientation.normalized();
+  return true;
+}
+
+void Collisions::prepare(const Particles& particles, const ClothTopology& topology) {
+  const int n = particles.size();
+  obstacle_contacts_.assign(static_cast<std::size_t>(n) * obstacles_.size(), ContactState());
+  box_lo_.assign(n, Vec3::Zero());
+  box_hi_.assign(n, Vec3::Zero());
+  particle_contacts_.reserve(particles);
+  self_collision_pairs_.reserve(particles, topology);
+  substep_ = 0;
+  checked_substep_ = -1;
+  dt_ = 0.0;
+  stats_ = CollisionStats();
+  computeSweptBoxes(particles, 0.0);
+  findCandidates(particles, topology);
+}
+
+bool Collisions::particleContactsActive(const Particles& particles) const {
+  return particles.size() > particles.cloth_count;
+}
+
+bool Collisions::selfCollisionActive(const ClothTopology& topology) const {
+  return self_collision_ && topology.triangleCount() > 0;
+}
+
+// The motion bound of the broad phase: from where the particle is to its unconstrained prediction
+// time_left later (x + v T + g T^2, above the substepped free flight x + v T + g T^2 (1 + 1/n) / 2),
+// grown by half the radius for the constraints' deviation from it. Kinematic particles move exactly
+// to their prescribed target. After predict() the substep start is included as well.
+void Collisions::computeSweptBoxes(const Particles& p, double time_left) {
+  const bool mid_step = checked_substep_ >= 0;
+  for (int i = 0; i < p.size(); ++i) {
+    const Vec3& x = p.position[i];
+    Vec3 end;
+    double slack = 0.0;
+    if (p.inverse_mass[i] == 0.0) {
+      end = p.kinematic_to[i];
+    } else {
+      end = x + time_left * p.velocity[i] + (time_left * time_left) * gravity_;
+      slack = kBoxSlack * p.radius[i];
+    }
+    Vec3 lo = x.cwiseMin(end), hi = x.cwiseMax(end);
+    if (mid_step) {
+      lo = lo.cwiseMin(p.substep_start[i]);
+      hi = hi.cwiseMax(p.substep_start[i]);
+    }
+    box_lo_[i] = lo.array() - slack;
+    box_hi_[i] = hi.array() + slack;
+  }
+}
+
+void Collisions::findCandidates(const Particles& particles, const ClothTopology& topology) {
+  if (particleContactsActive(particles)) {
+    particle_contacts_.findPairs(particles, box_lo_, box_hi_);
+  }
+  if (selfCollisionActive(topology)) {
+    self_collision_pairs_.findPairs(particles, topology, box_lo_, box_hi_, thickness_);
+  }
+  stats_.particle_pairs = particle_contacts_.pairCount();
+  stats_.vertex_triangle_pairs = selfCollisionActive(topology) ? self_collision_pairs_.pairCount() : 0;
+  ++stats_.broad_phase_runs;
+}
+
+bool Collisions::leftSweptBoxes(const Particles& p) const {
+  for (int i = 0; i < p.size(); ++i) {
+    const Vec3& x = p.position[i];
+    if (!((x.array() >= box_lo_[i].array()).all() && (x.array() <= box_hi_[i].array()).all())) {
+      return true;
+    }
+  }
+  return false;
+}
+
+void Collisions::beginStep(Particles& particles, const ClothTopology& topology, double dt) {
+  dt_ = dt;
+  stats_.broad_phase_runs = 0;
+  checked_substep_ = -1;
+  for (std::size_t k = 0; k < obstacles_.size(); ++k) {
+    frame_begin_[k] = frame_end_[k] = frameFromPose(obstacles_[k].pose);
+  }
+  const bool particle_contacts = particleContactsActive(particles);
+  const bool self_collision = selfCollisionActive(topology);
+  if (particle_contacts || self_collision) {
+    computeSweptBoxes(particles, dt);
+    findCandidates(particles, topology);
+  }
+  // Overlaps the step starts with are separated here, before predict() copies the positions into
+  // substep_start, so the separation is no velocity (Macklin et al. 2014, sec. 4.4).
+  const double max_shift = max_separation_speed_ * dt;
+  if (particle_contacts) particle_contacts_.preStabilize(particles, max_shift);
+  if (self_collision) self_collision_pairs_.preStabilize(particles, thickness_, max_shift);
+  preStabilizeObstacles(particles, max_shift);
+  particles.step_start = particles.position;
+}
+
+void Collisions::setSubstepFraction(double s_begin, double s_end) {
+  if (substep_ == INT_MAX) {
+    // Stamps wrap after 2^31 substeps (weeks of running): forget every state, none is current.
+    substep_ = 0;
+    for (ContactState& state : obstacle_contacts_) state.substep = -1;
+  }
+  ++substep_;
+  substep_begin_ = s_begin;
+  for (std::size_t k = 0; k < obstacles_.size(); ++k) {
+    frame_begin_[k] = interpolateFrame(obstacles_[k].pose, obstacle_targets_[k], s_begin);
+    frame_end_[k] = interpolateFrame(obstacles_[k].pose, obstacle_targets_[k], s_end);
+  }
+}
+
+double Collisions::project(Particles& particles, const ClothTopology& topology) {
+  const bool particle_contacts = particleContactsActive(particles);
+  const bool self_collision = selfCollisionActive(topology);
+  if (checked_substep_ != substep_) {
+    // First pass of a substep: the prediction is done. A particle outside its swept box may meet
+    // contacts the broad phase did not list: find them again for the rest of the step.
+    checked_substep_ = substep_;
+    if ((particle_contacts || self_collision) && leftSweptBoxes(particles)) {
+      computeSweptBoxes(particles, (1.0 - substep_begin_) * dt_);
+      findCandidates(particles, topology);
+    }
+  }
+  double max_change = 0.0;
+  if (particle_contacts) {
+    max_change = std::max(max_change,
+                          particle_contacts_.project(particles, substep_, kOverlapSlop, friction_));
+  }
+  if (self_collision) {
+    max_change = std::max(max_change, self_collision_pairs_.project(particles, thickness_, substep_,
+                                                                    kOverlapSlop, friction_));
+  }
+  max_change = std::max(max_change, projectObstacles(particles));
+  max_change = std::max(max_change, projectBounds(particles));
+  return max_change;
+}
+
+void Collisions::preStabilizeObstacles(Particles& p, double max_shift) const {
+  const std::size_t count = shapes_.size();
+  for (int i = 0; i < p.size(); ++i) {
+    if (p.inverse_mass[i] == 0.0) continue;
+    for (std::size_t k = 0; k < count; ++k) {
+      Vec3 normal;
+      const double clearance =
+          signedDistance(shapes_[k], frame_end_[k].toLocal(p.position[i]), normal) - p.radius[i];
+      if (clearance < 0.0) {
+        p.position[i] += std::min(-clearance, max_shift) * (frame_end_[k].rotation * normal);
+      }
+    }
+  }
+}
+
+// Particle-environment contact (seed eq. plane_constraint, extended to any shape through its
+// signed distance): C = distance(x) - r >= 0, the full correction to the particle since the shape
+// is immovable, along the surface normal. Swept in the shape's frame for no tunnelling (see
+// collisions.h), followed by friction relative to the shape's own motion over the substep.
+double Collisions::projectObstacles(Particles& p) {
+  const std::size_t count = shapes_.size();
+  if (count == 0) return 0.0;
+  double max_change = 0.0;
+  for (int i = 0; i < p.size(); ++i) {
+    if (p.inverse_mass[i] == 0.0) continue;
+    Vec3& x = p.position[i];
+    const double r = p.radius[i];
+    for (std::size_t k = 0; k < count; ++k) {
+      const Shape& shape = shapes_[k];
+      const Frame& begin = frame_begin_[k];
+      const Frame& end = frame_end_[k];
+      const Vec3 b = end.toLocal(x);  // where the particle is, relative to the shape now
+      Vec3 normal_b;
+      const double clearance = signedDistance(shape, b, normal_b) - r;
+      const Vec3 a = begin.toLocal(p.substep_start[i]);  // ... and where it was
+      // The distance is 1-Lipschitz: a segment whose end is farther from the surface than its
+      // length never touched the shape.
+      if (clearance >= (b - a).norm()) continue;
+      ContactState& state = obstacle_contacts_[static_cast<std::size_t>(i) * count + k];
+      if (!state.current(substep_)) {
+        const double start_clearance = signedDistance(shape, a) - r;
+        state.begin(substep_, start_clearance < -kOverlapSlop * r ? -start_clearance : 0.0);
+      }
+      double c = clearance;
+      Vec3 normal = normal_b;
+      double t = 0.0;
+      if (state.allowance > 0.0) {
+        c = clearance + state.allowance;  // started inside: only not deeper
+      } else if (sweepSphere(shape, a, b, r, t)) {
+        Vec3 normal_entry;
+        const Vec3 entry = a + t * (b - a);
+        signedDistance(shape, entry, normal_entry);
+        if (!(clearance < 0.0 && normal_b.dot(normal_entry) > 0.0)) {
+          // Crossed or cut through: back onto the tangent plane where the sphere entered.
+          c = (b - entry).dot(normal_entry);
+          normal = normal_entry;
+        }
+      }
+      if (c < 0.0) {
+        const Vec3 n = end.rotation * normal;
+        x -= c * n;
+        state.depth -= c;
+        state.normal = n;
+        max_change = std::max(max_change, -c);
+      }
+      if (state.depth > 0.0) {
+        // The shape carries the point under the particle's substep start along with it: the
+        // relative displacement is measured from there, so a moving shape drags what rests on it.
+        x += frictionCorrection(x - end.toWorld(a), state, friction_);
+      }
+    }
+  }
+  return max_change;
+}
+
+// The seed's box (C1): x_i = min(max(x_i, min), max), component-wise. Kinematic particles are
+// prescribed and left alone.
+double Collisions::projectBounds(Particles& particles) const {
+  if (!bounds_.enabled) return 0.0;
+  double max_change = 0.0;
+  for (int i = 0; i < particles.size(); ++i) {
+    if (particles.inverse_mass[i] == 0.0) continue;
+    Vec3& x = particles.position[i];
+    const Vec3 clamped = x.cwiseMax(bounds_.min).cwiseMin(bounds_.max);
+    max_change = std::max(max_change, (clamped - x).norm());
+    x = clamped;
+  }
+  return max_change;
+}
+
+void Collisions::endStep() {
+  for (std::size_t k = 0; k < obstacles_.size(); ++k) obstacles_[k].pose = obstacle_targets_[k];
+}
+
+double Collisions::maxPenetration(const Particles& particles,
+                                  const ClothTopology& topology) const {
+  double depth = 0.0;
+  if (bounds_.enabled) {
+    for (int i = 0; i < particles.size(); ++i) {
+      const Vec3& x = particles.position[i];
+      depth = std::max(depth, (bounds_.min - x).maxCoeff());
+      depth = std::max(depth, (x - bounds_.max).maxCoeff());
+    }
+  }
+  for (std::size_t k = 0; k < shapes_.size(); ++k) {
+    const Frame frame = frameFromPose(obstacles_[k].pose);
+    for (int i = 0; i < particles.size(); ++i) {
+      if (particles.inverse_mass[i] == 0.0) continue;  // prescribed: not the solver's to fix
+      depth = std::max(depth, particles.radius[i] -
+                                  signedDistance(shapes_[k], frame.toLocal(particles.position[i])));
+    }
+  }
+  if (particleContactsActive(particles)) {
+    depth = std::max(depth, particle_contacts_.maxPenetration(particles));
+  }
+  if (selfCollisionActive(topology)) {
+    depth = std::max(depth, self_collision_pairs_.maxPenetration(particles, thickness_));
+  }
+  return depth;
+}
+
+}  // namespace pbd_cloth

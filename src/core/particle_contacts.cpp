@@ -1,0 +1,130 @@
+#include "pbd_cloth/particle_contacts.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace pbd_cloth {
+
+namespace {
+
+// Below this centre distance two particles have no direction between them (coincident).
+constexpr double kMinDistance = 1e-12;
+
+bool boxesOverlap(const Vec3& lo_a, const Vec3& hi_a, const Vec3& lo_b, const Vec3& hi_b) {
+  return (lo_a.array() <= hi_b.array()).all() && (lo_b.array() <= hi_a.array()).all();
+}
+
+// Unit vector from j to i; coincident particles fall back on where they were at the substep start,
+// then on +z, so the pair still separates instead of dividing by zero.
+Vec3 separationDirection(const Particles& p, int i, int j, const Vec3& delta, double distance) {
+  if (distance > kMinDistance) return delta / distance;
+  const Vec3 before = p.substep_start[i] - p.substep_start[j];
+  const double length = before.norm();
+  return length > kMinDistance ? Vec3(before / length) : Vec3::UnitZ();
+}
+
+}  // namespace
+
+void ParticleContacts::reserve(const Particles& particles) {
+  const int n = particles.size();
+  hash_.reserve(n);
+  grown_lo_.reserve(n);
+  grown_hi_.reserve(n);
+  const int granular = n - particles.cloth_count;
+  pairs_.reserve(16 * static_cast<std::size_t>(granular));
+}
+
+void ParticleContacts::findPairs(const Particles& p, const Vec3Array& lo, const Vec3Array& hi) {
+  pairs_.clear();
+  const int n = p.size();
+  if (n == p.cloth_count) return;  // no granular particles
+  grown_lo_.resize(n);
+  grown_hi_.resize(n);
+  double cell = 0.0;
+  for (int k = 0; k < n; ++k) {
+    grown_lo_[k] = lo[k].array() - p.radius[k];
+    grown_hi_[k] = hi[k].array() + p.radius[k];
+    cell = std::max(cell, (grown_hi_[k] - grown_lo_[k]).maxCoeff());
+  }
+  if (!(cell > 0.0) || !std::isfinite(cell)) return;
+  hash_.build(grown_lo_, n, cell);
+  for (int i = p.cloth_count; i < n; ++i) {
+    // A box's lower corner lies at most one cell below any box it overlaps.
+    const Vec3 query_lo = grown_lo_[i].array() - cell;
+    hash_.forEachInRange(query_lo, grown_hi_[i], [&](int j) {
+      if (j == i || (j >= p.cloth_count && j < i)) return;  // each granular pair once
+      if (p.inverse_mass[i] == 0.0 && p.inverse_mass[j] == 0.0) return;
+      if (!boxesOverlap(grown_lo_[i], grown_hi_[i], grown_lo_[j], grown_hi_[j])) return;
+      ParticlePair pair;
+      pair.i = i;
+      pair.j = j;
+      pairs_.push_back(pair);
+    });
+  }
+}
+
+void ParticleContacts::preStabilize(Particles& p, double max_shift) const {
+  for (const ParticlePair& pair : pairs_) {
+    const double wi = p.inverse_mass[pair.i], wj = p.inverse_mass[pair.j];
+    const double w = wi + wj;
+    if (w == 0.0) continue;
+    const Vec3 delta = p.position[pair.i] - p.position[pair.j];
+    const double distance = delta.norm();
+    const double overlap = p.radius[pair.i] + p.radius[pair.j] - distance;
+    if (overlap <= 0.0) continue;
+    const Vec3 n = separationDirection(p, pair.i, pair.j, delta, distance);
+    const double shift = std::min(overlap, max_shift);
+    p.position[pair.i] += (wi / w * shift) * n;
+    p.position[pair.j] -= (wj / w * shift) * n;
+  }
+}
+
+double ParticleContacts::project(Particles& p, int substep, double slop,
+                                 const FrictionConfig& friction) {
+  double max_change = 0.0;
+  for (ParticlePair& pair : pairs_) {
+    const int i = pair.i, j = pair.j;
+    const double wi = p.inverse_mass[i], wj = p.inverse_mass[j];
+    const double w = wi + wj;
+    if (w == 0.0) continue;
+    const double contact_distance = p.radius[i] + p.radius[j];
+    ContactState& state = pair.state;
+    if (!state.current(substep)) {
+      const double start_overlap =
+          contact_distance - (p.substep_start[i] - p.substep_start[j]).norm();
+      state.begin(substep, start_overlap > slop * contact_distance ? start_overlap : 0.0);
+    }
+    const Vec3 delta = p.position[i] - p.position[j];
+    const double distance = delta.norm();
+    // Seed eq. particle_particle_constraint, solved like a stretch constraint: the correction
+    // along the centre line is split by inverse mass, which conserves momentum.
+    const double c = distance - (contact_distance - state.allowance);
+    if (c < 0.0) {
+      const Vec3 n = separationDirection(p, i, j, delta, distance);
+      p.position[i] -= (wi / w * c) * n;
+      p.position[j] += (wj / w * c) * n;
+      state.depth -= c;
+      state.normal = n;
+      max_change = std::max(max_change, -c * std::max(wi, wj) / w);
+    }
+    if (state.depth > 0.0) {
+      const Vec3 relative = (p.position[i] - p.substep_start[i]) - (p.position[j] - p.substep_start[j]);
+      const Vec3 correction = frictionCorrection(relative, state, friction);
+      p.position[i] += (wi / w) * correction;
+      p.position[j] -= (wj / w) * correction;
+    }
+  }
+  return max_change;
+}
+
+double ParticleContacts::maxPenetration(const Particles& p) const {
+  double depth = 0.0;
+  for (const ParticlePair& pair : pairs_) {
+    if (p.inverse_mass[pair.i] == 0.0 && p.inverse_mass[pair.j] == 0.0) continue;
+    depth = std::max(depth, p.radius[pair.i] + p.radius[pair.j] -
+                                (p.position[pair.i] - p.position[pair.j]).norm());
+  }
+  return depth;
+}
+
+}  // namespace pbd_cloth

@@ -1,0 +1,309 @@
+// The one validation routine of the scene tree. Every message names the dotted key (list entries as
+// `grippers[1].radius`) and the allowed range, so a user can fix a YAML file or a ROS parameter
+// without reading the code. Every comparison is preceded by a finiteness check: NaN compares false
+// with everything and would otherwise slip through a range test.
+#include "pbd_cloth/scene_config.h"
+
+#include <cctype>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <set>
+#include <sstream>
+
+namespace pbd_cloth {
+
+const char* toString(Method method) {
+  switch (method) {
+    case Method::kVerlet:
+      return "verlet";
+    case Method::kPbd:
+      return "pbd";
+    case Method::kXpbd:
+      return "xpbd";
+    case Method::kMassSpring:
+      return "mass_spring";
+  }
+  return "unknown";
+}
+
+const char* toString(Ordering ordering) {
+  switch (ordering) {
+    case Ordering::kGaussSeidel:
+      return "gauss_seidel";
+    case Ordering::kJacobi:
+      return "jacobi";
+  }
+  return "unknown";
+}
+
+const char* toString(ShapeType shape) {
+  switch (shape) {
+    case ShapeType::kSphere:
+      return "sphere";
+    case ShapeType::kBox:
+      return "box";
+    case ShapeType::kCapsule:
+      return "capsule";
+    case ShapeType::kPlane:
+      return "plane";
+  }
+  return "unknown";
+}
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+// Upper limits that are not physics but protect the process: a typo like rows: 50000 would
+// otherwise allocate gigabytes before anyone sees an error.
+constexpr int kMaxPasses = 1000;
+constexpr std::int64_t kMaxParticles = 1000000;
+
+std::string formatNumber(double value) {
+  std::ostringstream out;
+  out.precision(10);
+  out << value;
+  return out.str();
+}
+
+std::string formatVector(const Eigen::Vector3d& v) {
+  return "[" + formatNumber(v.x()) + ", " + formatNumber(v.y()) + ", " + formatNumber(v.z()) + "]";
+}
+
+std::string indexed(const std::string& list, std::size_t index) {
+  return list + "[" + std::to_string(index) + "]";
+}
+
+// A range of real numbers with open or closed ends; infinite ends are always open.
+struct Range {
+  double low;
+  double high;
+  bool low_open;
+  bool high_open;
+
+  bool contains(double v) const {
+    return std::isfinite(v) && (low_open ? v > low : v >= low) &&
+           (high_open ? v < high : v <= high);
+  }
+  // "> 0", ">= 0", "in (0, 2)" and the like.
+  std::string text() const {
+    if (std::isinf(high)) return (low_open ? "> " : ">= ") + formatNumber(low);
+    return std::string("in ") + (low_open ? "(" : "[") + formatNumber(low) + ", " +
+           formatNumber(high) + (high_open ? ")" : "]");
+  }
+};
+
+const Range kPositive{0.0, kInf, true, true};
+const Range kNonNegative{0.0, kInf, false, true};
+const Range kUnit{0.0, 1.0, false, false};
+
+void checkNumber(const std::string& key, double value, const Range& range) {
+  if (!range.contains(value)) {
+    throw ConfigError(key,
+                      "must be a finite number " + range.text() + ", got " + formatNumber(value));
+  }
+}
+
+void checkFinite(const std::string& key, double value) {
+  if (!std::isfinite(value)) {
+    throw ConfigError(key, "must be a finite number, got " + formatNumber(value));
+  }
+}
+
+void checkFinite(const std::string& key, const Eigen::Vector3d& value) {
+  if (!value.allFinite()) {
+    throw ConfigError(key, "must be 3 finite numbers [x, y, z], got " + formatVector(value));
+  }
+}
+
+void checkInteger(const std::string& key, std::int64_t value, std::int64_t low, std::int64_t high) {
+  if (value < low || value > high) {
+    throw ConfigError(key, "must be an integer in [" + std::to_string(low) + ", " +
+                               std::to_string(high) + "], got " + std::to_string(value));
+  }
+}
+
+// The quaternion is normalized by the reader; here only what the reader could not fix is refused.
+void checkPose(const std::string& key, const Pose& pose) {
+  checkFinite(key + " (position)", pose.position);
+  const Eigen::Vector4d q = pose.orientation.coeffs();
+  if (!q.allFinite() || q.norm() == 0.0) {
+    throw ConfigError(key, "orientation (qx qy qz qw) must be finite and non-zero, got [" +
+                               formatNumber(q.x()) + ", " + formatNumber(q.y()) + ", " +
+                               formatNumber(q.z()) + ", " + formatNumber(q.w()) + "]");
+  }
+}
+
+// tf2 refuses frame names with a leading '/' (a ROS 1 tf habit) at the first lookup, long after
+// start-up; refuse them here where the key can be named.
+void checkFrame(const std::string& key, const std::string& frame, bool may_be_empty) {
+  if (frame.empty() && !may_be_empty) {
+    throw ConfigError(key, "must be a non-empty tf frame name");
+  }
+  if (!frame.empty() && frame.front() == '/') {
+    throw ConfigError(key, "must be a tf2 frame name without a leading '/', got '" + frame + "'");
+  }
+}
+
+// Gripper and obstacle names become topic and service names (~<name>/pose), so they must be valid
+// ROS graph name tokens; a bad one would otherwise throw inside the node's advertise().
+void checkName(const std::string& key, const std::string& name, std::set<std::string>& used) {
+  bool valid = !name.empty() && std::isalpha(static_cast<unsigned char>(name.front()));
+  for (char c : name) {
+    valid = valid && (std::isalnum(static_cast<unsigned char>(c)) || c == '_');
+  }
+  if (!valid) {
+    throw ConfigError(key,
+                      "must be a name of letters, digits and '_' starting with a letter (it "
+                      "names the ~<name>/pose topic), got '" +
+                          name + "'");
+  }
+  if (!used.insert(name).second) {
+    throw ConfigError(key, "'" + name +
+                               "' is used twice (gripper and obstacle names share the ~<name>/pose "
+                               "topics and must all be different)");
+  }
+}
+
+void checkParticleIndex(const std::string& key, int index, std::int64_t cloth_count) {
+  if (index < 0 || index >= cloth_count) {
+    throw ConfigError(key, "index " + std::to_string(index) + " out of range [0, " +
+                               std::to_string(cloth_count - 1) + "]");
+  }
+}
+
+void validateSolver(const SolverConfig& s) {
+  checkInteger("solver.substeps", s.substeps, 1, kMaxPasses);
+  checkInteger("solver.iterations", s.iterations, 1, kMaxPasses);
+  checkNumber("solver.tolerance", s.tolerance, kNonNegative);
+  // Over-relaxed Jacobi with averaging converges only for 0 < w < 2 (REFERENCE_CASES.md case 7).
+  checkNumber("solver.relaxation", s.relaxation, Range{0.0, 2.0, true, true});
+  checkFinite("solver.gravity", s.gravity);
+  checkNumber("solver.damping", s.damping, kNonNegative);
+  checkNumber("solver.stretch_stiffness", s.stretch_stiffness, kUnit);
+  checkNumber("solver.bend_stiffness", s.bend_stiffness, kUnit);
+  checkNumber("solver.spring_stiffness", s.spring_stiffness, kPositive);
+  checkNumber("solver.spring_damping", s.spring_damping, kNonNegative);
+  checkNumber("solver.bend_spring_stiffness", s.bend_spring_stiffness, kNonNegative);
+}
+
+void validateCloth(const ClothConfig& c) {
+  checkInteger("cloth.rows", c.rows, 1, kMaxParticles);
+  checkInteger("cloth.cols", c.cols, 1, kMaxParticles);
+  const std::int64_t count = static_cast<std::int64_t>(c.rows) * c.cols;
+  if (count < 2 || count > kMaxParticles) {
+    throw ConfigError("cloth.rows", "rows * cols must be in [2, " + std::to_string(kMaxParticles) +
+                                        "], got " + std::to_string(c.rows) + " * " +
+                                        std::to_string(c.cols) + " = " + std::to_string(count));
+  }
+  checkNumber("cloth.spacing", c.spacing, kPositive);
+  checkNumber("cloth.mass", c.mass, kPositive);
+  checkFinite("cloth.origin", c.origin);
+  checkFinite("cloth.rpy", c.rpy);
+  checkNumber("cloth.stretch_compliance", c.stretch_compliance, kNonNegative);
+  checkFinite("cloth.bend_compliance", c.bend_compliance);
+  checkNumber("cloth.thickness", c.thickness, kPositive);
+  const double mu_s = c.friction.static_coefficient;
+  checkNumber("cloth.friction.static", mu_s, kNonNegative);
+  // Kinetic friction above static would let a sliding contact stop and then be unable to start.
+  checkNumber("cloth.friction.kinetic", c.friction.kinetic_coefficient,
+              Range{0.0, mu_s, false, false});
+  for (std::size_t k = 0; k < c.pinned.size(); ++k) {
+    checkParticleIndex(indexed("cloth.pinned", k), c.pinned[k], count);
+  }
+  for (std::size_t k = 0; k < c.point_masses.size(); ++k) {
+    const std::string key = indexed("cloth.point_masses", k);
+    checkParticleIndex(key, c.point_masses[k].first, count);
+    checkNumber(key + " (kg)", c.point_masses[k].second, kPositive);
+  }
+}
+
+void validateGranular(const GranularConfig& g) {
+  checkInteger("granular.count", g.count, 0, kMaxParticles);
+  checkNumber("granular.radius", g.radius, kPositive);
+  checkNumber("granular.mass", g.mass, kPositive);
+  checkFinite("granular.region.min", g.region_min);
+  checkFinite("granular.region.max", g.region_max);
+  if ((g.region_min.array() > g.region_max.array()).any()) {
+    throw ConfigError("granular.region", "min must be <= max in x, y and z, got min " +
+                                             formatVector(g.region_min) + ", max " +
+                                             formatVector(g.region_max));
+  }
+}
+
+void validateGripper(const std::string& key, const GripperConfig& g, std::set<std::string>& names) {
+  checkName(key + ".name", g.name, names);
+  checkNumber(key + ".radius", g.radius, kPositive);
+  checkFrame(key + ".tf_frame", g.tf_frame, true);
+  double previous_t = 0.0;
+  for (std::size_t k = 0; k < g.trajectory.size(); ++k) {
+    const Waypoint& w = g.trajectory[k];
+    const std::string wkey = indexed(key + ".trajectory", k);
+    // Waypoints are searched in order; a time going backwards would make a segment unreachable.
+    if (!std::isfinite(w.t) || w.t < previous_t) {
+      throw ConfigError(wkey + ".t", "must be a finite time >= 0 and >= the previous waypoint's (" +
+                                         formatNumber(previous_t) + " s), got " +
+                                         formatNumber(w.t));
+    }
+    previous_t = w.t;
+    checkPose(wkey + ".pose", w.pose);
+    checkInteger(wkey + ".grasp", w.grasp, -1, 1);
+  }
+}
+
+void validateObstacle(const std::string& key, const ObstacleConfig& o,
+                      std::set<std::string>& names) {
+  checkName(key + ".name", o.name, names);
+  checkPose(key + ".pose", o.pose);
+  switch (o.shape) {
+    case ShapeType::kSphere:
+      checkNumber(key + ".radius", o.radius, kPositive);
+      break;
+    case ShapeType::kCapsule:
+      checkNumber(key + ".radius", o.radius, kPositive);
+      checkNumber(key + ".length", o.length, kNonNegative);
+      break;
+    case ShapeType::kBox:
+      checkFinite(key + ".size", o.size);
+      if ((o.size.array() <= 0.0).any()) {
+        throw ConfigError(key + ".size",
+                          "every edge length must be > 0, got " + formatVector(o.size));
+      }
+      break;
+    case ShapeType::kPlane:
+      checkFinite(key + ".normal", o.normal);
+      if (o.normal.norm() == 0.0) throw ConfigError(key + ".normal", "must be non-zero");
+      checkFinite(key + ".offset", o.offset);
+      break;
+  }
+}
+
+}  // namespace
+
+void validate(const SceneConfig& scene) {
+  checkFrame("frame_id", scene.frame_id, false);
+  checkNumber("step_rate", scene.step_rate, Range{0.0, 10000.0, true, false});
+  // Publishing faster than stepping would send the same state twice.
+  checkNumber("publish_rate", scene.publish_rate, Range{0.0, scene.step_rate, true, false});
+  validateSolver(scene.solver);
+  validateCloth(scene.cloth);
+  validateGranular(scene.granular);
+  std::set<std::string> names;
+  for (std::size_t k = 0; k < scene.grippers.size(); ++k) {
+    validateGripper(indexed("grippers", k), scene.grippers[k], names);
+  }
+  for (std::size_t k = 0; k < scene.obstacles.size(); ++k) {
+    validateObstacle(indexed("obstacles", k), scene.obstacles[k], names);
+  }
+  if (scene.bounds.enabled) {
+    checkFinite("bounds.min", scene.bounds.min);
+    checkFinite("bounds.max", scene.bounds.max);
+    if ((scene.bounds.min.array() >= scene.bounds.max.array()).any()) {
+      throw ConfigError("bounds", "min must be < max in x, y and z, got min " +
+                                      formatVector(scene.bounds.min) + ", max " +
+                                      formatVector(scene.bounds.max));
+    }
+  }
+}
+
+}  // namespace pbd_cloth

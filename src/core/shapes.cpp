@@ -1,0 +1,105 @@
+#include "pbd_cloth/shapes.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace pbd_cloth {
+
+namespace {
+
+// Sphere tracing stops this close to contact (relative to the swept radius) ...
+constexpr double kSweepTolerance = 1e-7;
+// ... or after this many steps: only a path grazing the surface at a tiny angle needs more, and
+// such a path penetrates by no more than the discrete test then resolves.
+constexpr int kSweepMaxSteps = 64;
+
+}  // namespace
+
+Shape makeShape(const ObstacleConfig& obstacle) {
+  Shape shape;
+  shape.type = obstacle.shape;
+  shape.radius = obstacle.radius;
+  shape.half_length = 0.5 * obstacle.length;
+  shape.half_extents = 0.5 * obstacle.size;
+  const double norm = obstacle.normal.norm();
+  shape.normal = norm > 0.0 ? Vec3(obstacle.normal / norm) : Vec3::UnitZ();
+  shape.offset = norm > 0.0 ? obstacle.offset / norm : obstacle.offset;
+  return shape;
+}
+
+Frame frameFromPose(const Pose& pose) {
+  Frame frame;
+  frame.rotation = pose.orientation.normalized().toRotationMatrix();
+  frame.translation = pose.position;
+  return frame;
+}
+
+Frame interpolateFrame(const Pose& a, const Pose& b, double s) {
+  Frame frame;
+  frame.rotation =
+      a.orientation.normalized().slerp(s, b.orientation.normalized()).toRotationMatrix();
+  frame.translation = (1.0 - s) * a.position + s * b.position;
+  return frame;
+}
+
+double signedDistance(const Shape& shape, const Vec3& x, Vec3& normal) {
+  switch (shape.type) {
+    case ShapeType::kPlane:
+      normal = shape.normal;
+      return shape.normal.dot(x) - shape.offset;
+    case ShapeType::kSphere: {
+      const double length = x.norm();
+      // At the centre every direction is equally short: pick +z.
+      normal = length > 0.0 ? Vec3(x / length) : Vec3::UnitZ();
+      return length - shape.radius;
+    }
+    case ShapeType::kCapsule: {
+      const Vec3 axis_point(0.0, 0.0, std::clamp(x.z(), -shape.half_length, shape.half_length));
+      const Vec3 away = x - axis_point;
+      const double length = away.norm();
+      normal = length > 0.0 ? Vec3(away / length) : Vec3::UnitX();
+      return length - shape.radius;
+    }
+    case ShapeType::kBox: {
+      const Vec3 q = x.cwiseAbs() - shape.half_extents;
+      const Vec3 sign(x.x() < 0.0 ? -1.0 : 1.0, x.y() < 0.0 ? -1.0 : 1.0, x.z() < 0.0 ? -1.0 : 1.0);
+      int axis = 0;
+      const double largest = q.maxCoeff(&axis);
+      if (largest > 0.0) {
+        // Outside: distance to the nearest face, edge or corner.
+        const Vec3 outside = q.cwiseMax(0.0);
+        const double distance = outside.norm();
+        normal = outside.cwiseProduct(sign) / distance;
+        return distance;
+      }
+      // Inside: out through the nearest face.
+      normal = Vec3::Zero();
+      normal[axis] = sign[axis];
+      return largest;
+    }
+  }
+  normal = Vec3::UnitZ();
+  return 0.0;
+}
+
+double signedDistance(const Shape& shape, const Vec3& x) {
+  Vec3 unused;
+  return signedDistance(shape, x, unused);
+}
+
+bool sweepSphere(const Shape& shape, const Vec3& a, const Vec3& b, double r, double& t) {
+  const Vec3 direction = b - a;
+  const double length = direction.norm();
+  const double tolerance = kSweepTolerance * r;
+  t = 0.0;
+  for (int step = 0; step < kSweepMaxSteps; ++step) {
+    const double clearance = signedDistance(shape, a + t * direction) - r;
+    if (clearance <= tolerance) return true;
+    if (length == 0.0) return false;
+    t += clearance / length;
+    if (t > 1.0) return false;
+  }
+  return false;
+}
+
+}  // namespace pbd_cloth

@@ -1,0 +1,257 @@
+#include "pbd_cloth/simulation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "pbd_cloth/cloth_builder.h"
+
+namespace pbd_cloth {
+
+Pose interpolate(const Pose& a, const Pose& b, double s) {
+  Pose out;
+  out.position = (1.0 - s) * a.position + s * b.position;
+  out.orientation = a.orientation.slerp(s, b.orientation);
+  return out;
+}
+
+namespace {
+
+// Pose of a scripted trajectory at time t: linear/slerp between waypoints, held after the last.
+Pose trajectoryPose(const std::vector<Waypoint>& trajectory, double t) {
+  if (t <= trajectory.front().t) return trajectory.front().pose;
+  for (std::size_t k = 1; k < trajectory.size(); ++k) {
+    const Waypoint &a = trajectory[k - 1], &b = trajectory[k];
+    if (t <= b.t) {
+      const double span = b.t - a.t;
+      return interpolate(a.pose, b.pose, span > 0.0 ? (t - a.t) / span : 1.0);
+    }
+  }
+  return trajectory.back().pose;
+}
+
+}  // namespace
+
+Simulation::Simulation(const SceneConfig& scene) : scene_(scene) {
+  validate(scene_);
+  build();
+}
+
+void Simulation::build() {
+  buildScene(scene_, particles_, topology_);
+  initial_particles_ = particles_;
+  collisions_.configure(scene_);
+  solver_.configure(scene_.solver, scene_.cloth);
+  solver_.prepare(particles_, topology_);
+  collisions_.prepare(particles_, topology_);
+  solver_.mutableStats() = StepStats();
+  solver_.initializeVelocities(particles_, 1.0 / scene_.step_rate);
+  grippers_.assign(scene_.grippers.size(), GripperState());
+  for (std::size_t g = 0; g < grippers_.size(); ++g) {
+    const auto& trajectory = scene_.grippers[g].trajectory;
+    if (!trajectory.empty()) grippers_[g].pose = grippers_[g].target = trajectory.front().pose;
+  }
+  time_ = 0.0;
+  computeStrain(particles_, topology_, solver_.mutableStats().max_strain,
+                solver_.mutableStats().mean_strain);
+}
+
+// Starts again from the scene as configured now: live-tuned settings (setSolverConfig, ...) are
+// kept, since they were written into scene_.
+void Simulation::reset() { build(); }
+
+void Simulation::kinematicIndices(std::vector<unsigned>& out) const {
+  out.clear();
+  for (int i = 0; i < particles_.size(); ++i) {
+    if (particles_.isKinematic(i)) out.push_back(static_cast<unsigned>(i));
+  }
+}
+
+int Simulation::gripperIndex(const std::string& name) const {
+  for (std::size_t g = 0; g < scene_.grippers.size(); ++g) {
+    if (scene_.grippers[g].name == name) return static_cast<int>(g);
+  }
+  return -1;
+}
+
+const std::string& Simulation::gripperName(int gripper) const {
+  return scene_.grippers[gripper].name;
+}
+
+void Simulation::setGripperPose(int gripper, const Pose& pose) {
+  grippers_[gripper].live = true;
+  grippers_[gripper].target = pose;
+}
+
+const Pose& Simulation::gripperPose(int gripper) const { return grippers_[gripper].pose; }
+
+bool Simulation::gripperGrasping(int gripper) const { return grippers_[gripper].grasping; }
+
+GraspResult Simulation::setGrasp(int gripper, bool grasp) {
+  GripperState& state = grippers_[gripper];
+  const GripperConfig& config = scene_.grippers[gripper];
+  GraspResult result;
+  if (!grasp) {
+    result.grasped_count = static_cast<int>(state.grasped.size());
+    releaseGrasp(state);
+    result.success = true;
+    result.message = "released " + std::to_string(result.grasped_count) + " particles";
+    kinematicSetChanged();
+    return result;
+  }
+  releaseGrasp(state);
+  const Pose& pose = state.pose;
+  const Eigen::Quaterniond to_local = pose.orientation.conjugate();
+  for (int i = 0; i < particles_.cloth_count; ++i) {
+    if (initial_particles_.isKinematic(i) || particles_.isKinematic(i)) continue;  // pinned/held
+    if ((particles_.position[i] - pose.position).norm() > config.radius) continue;
+    state.grasped.push_back(i);
+    state.local_offsets.push_back(to_local * (particles_.position[i] - pose.position));
+    particles_.inverse_mass[i] = 0.0;
+    particles_.kinematic_from[i] = particles_.kinematic_to[i] = particles_.position[i];
+  }
+  state.grasping = !state.grasped.empty();
+  result.grasped_count = static_cast<int>(state.grasped.size());
+  result.success = state.grasping;
+  std::ostringstream message;
+  if (result.success) {
+    message << "grasped " << result.grasped_count << " particles";
+  } else {
+    message << "no free cloth particle within radius " << config.radius << " m of gripper '"
+            << config.name << "' at (" << pose.position.transpose() << ")";
+  }
+  result.message = message.str();
+  kinematicSetChanged();
+  return result;
+}
+
+void Simulation::releaseGrasp(GripperState& gripper) {
+  for (int i : gripper.grasped) {
+    particles_.inverse_mass[i] = 1.0 / particles_.mass[i];
+    // Released particles keep the gripper's velocity.
+    particles_.velocity[i] = gripper.velocity;
+  }
+  gripper.grasped.clear();
+  gripper.local_offsets.clear();
+  gripper.grasping = false;
+}
+
+void Simulation::kinematicSetChanged() {
+  if (scene_.cloth.tethers) {
+    buildTethers(particles_, topology_, scene_.cloth.spacing, topology_.tethers);
+  }
+}
+
+Eigen::Vector3d Simulation::gripperForce(int gripper) const {
+  Eigen::Vector3d force = Eigen::Vector3d::Zero();
+  for (int i : grippers_[gripper].grasped) force += solver_.constraintForce()[i];
+  return force;
+}
+
+int Simulation::obstacleIndex(const std::string& name) const {
+  const auto& obstacles = collisions_.obstacles();
+  for (std::size_t k = 0; k < obstacles.size(); ++k) {
+    if (obstacles[k].name == name) return static_cast<int>(k);
+  }
+  return -1;
+}
+
+void Simulation::setObstaclePose(int obstacle, const Pose& pose) {
+  collisions_.setObstacleTarget(obstacle, pose);
+}
+
+void Simulation::setSolverConfig(const SolverConfig& solver) {
+  SceneConfig candidate = scene_;
+  candidate.solver = solver;
+  validate(candidate);
+  scene_.solver = solver;
+  solver_.configure(scene_.solver, scene_.cloth);
+}
+
+void Simulation::setClothCompliance(double stretch_compliance, double bend_compliance) {
+  SceneConfig candidate = scene_;
+  candidate.cloth.stretch_compliance = stretch_compliance;
+  candidate.cloth.bend_compliance = bend_compliance;
+  validate(candidate);
+  scene_.cloth = candidate.cloth;
+  solver_.configure(solver_.config(), scene_.cloth);
+}
+
+void Simulation::setFriction(const FrictionConfig& friction) {
+  SceneConfig candidate = scene_;
+  candidate.cloth.friction = friction;
+  validate(candidate);
+  scene_.cloth.friction = friction;
+  collisions_.setFriction(friction);
+}
+
+// Scripted grippers: grasp events due by the start of this step fire, and the target is the
+// trajectory's pose at the end of the step. A live pose (setGripperPose) replaces the script.
+void Simulation::followTrajectories(double t_end) {
+  for (std::size_t g = 0; g < grippers_.size(); ++g) {
+    GripperState& state = grippers_[g];
+    const auto& trajectory = scene_.grippers[g].trajectory;
+    if (state.live || trajectory.empty()) continue;
+    while (state.next_waypoint < trajectory.size() &&
+           trajectory[state.next_waypoint].t <= time_ + 1e-9) {
+      const int grasp = trajectory[state.next_waypoint].grasp;
+      if (grasp >= 0) setGrasp(static_cast<int>(g), grasp == 1);
+      ++state.next_waypoint;
+    }
+    state.target = trajectoryPose(trajectory, t_end);
+  }
+}
+
+// Kinematic particles move from where they are to where their gripper (or pin) puts them at the
+// end of the step; the solver interpolates across substeps.
+void Simulation::updateKinematicTargets(double dt) {
+  for (int i = 0; i < particles_.size(); ++i) {
+    particles_.kinematic_from[i] = particles_.position[i];
+    particles_.kinematic_to[i] = particles_.position[i];
+  }
+  for (GripperState& state : grippers_) {
+    state.velocity = (state.target.position - state.pose.position) / dt;
+    for (std::size_t k = 0; k < state.grasped.size(); ++k) {
+      particles_.kinematic_to[state.grasped[k]] =
+          state.target.position + state.target.orientation * state.local_offsets[k];
+    }
+  }
+}
+
+void Simulation::step(double dt) {
+  followTrajectories(time_ + dt);
+  updateKinematicTargets(dt);
+  solver_.step(dt, particles_, topology_, collisions_);
+  for (GripperState& state : grippers_) state.pose = state.target;
+  time_ += dt;
+  StepStats& stats = solver_.mutableStats();
+  computeStrain(particles_, topology_, stats.max_strain, stats.mean_strain);
+  stats.max_penetration = collisions_.maxPenetration(particles_, topology_);
+}
+
+Metrics Simulation::computeMetrics() const {
+  Metrics metrics;
+  computeStrain(particles_, topology_, metrics.max_strain, metrics.mean_strain);
+  metrics.max_penetration = collisions_.maxPenetration(particles_, topology_);
+  metrics.finite = allFinite(particles_);
+  // A diverged state has no meaningful geometry to intersect.
+  metrics.self_intersections = metrics.finite ? countSelfIntersections(particles_, topology_) : -1;
+  const Vec3& g = scene_.solver.gravity;
+  for (int i = 0; i < particles_.size(); ++i) {
+    if (particles_.isKinematic(i)) continue;
+    metrics.kinetic_energy += 0.5 * particles_.mass[i] * particles_.velocity[i].squaredNorm();
+    metrics.potential_energy -= particles_.mass[i] * g.dot(particles_.position[i]);
+  }
+  if (scene_.solver.method == Method::kMassSpring) {
+    // Elastic energy of the explicit springs, so the baseline's energy is the full Hamiltonian.
+    for (const DistanceConstraint& con : topology_.stretch) {
+      const double stretch =
+          (particles_.position[con.i] - particles_.position[con.j]).norm() - con.rest_length;
+      metrics.potential_energy += 0.5 * scene_.solver.spring_stiffness * stretch * stretch;
+    }
+  }
+  metrics.energy = metrics.kinetic_energy + metrics.potential_energy;
+  return metrics;
+}
+
+}  // namespace pbd_cloth

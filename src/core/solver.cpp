@@ -1,0 +1,467 @@
+#include "pbd_cloth/solver.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+namespace pbd_cloth {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double>(b - a).count();
+}
+
+// Below this length a distance constraint has no direction: skipped (coincident particles).
+constexpr double kMinLength = 1e-12;
+// Below this a constraint's generalized inverse mass is zero (all particles kinematic): skipped.
+constexpr double kMinInverseMass = 1e-300;
+// A tether counts as satisfied up to this relative excess: the rounding of a projection onto its
+// own sphere, so a satisfied tether is not projected again and again.
+constexpr double kTetherSlack = 1e-14;
+
+// The mean-curvature vector b = sum_k K_k x_k of a hinge, computed as sum_{k>0} K_k (x_k - x_0)
+// (the weights sum to zero): the same value, without the cancellation of large coordinates that
+// would leave ~1e-12 m of noise in a flat hinge 1e4 m from the origin.
+Vec3 bendVector(const BendConstraint& con, const Particles& p) {
+  const Vec3& x0 = p.position[con.index[0]];
+  return con.weight[1] * (p.position[con.index[1]] - x0) +
+         con.weight[2] * (p.position[con.index[2]] - x0) +
+         con.weight[3] * (p.position[con.index[3]] - x0);
+}
+
+}  // namespace
+
+void Solver::configure(const SolverConfig& solver, const ClothConfig& cloth) {
+  config_ = solver;
+  stretch_compliance_ = cloth.stretch_compliance;
+  bend_compliance_ = cloth.bend_compliance;
+}
+
+void Solver::prepare(const Particles& particles, const ClothTopology& topology) {
+  const int n = particles.size();
+  stretch_lambda_.assign(topology.stretch.size(), 0.0);
+  bend_lambda_.assign(topology.bend.size(), 0.0);
+  jacobi_delta_.assign(n, Vec3::Zero());
+  jacobi_count_.assign(n, 0);
+  force_.assign(n, Vec3::Zero());
+  predicted_.assign(n, Vec3::Zero());
+  constraint_force_.assign(n, Vec3::Zero());
+}
+
+void Solver::initializeVelocities(Particles& particles, double dt) const {
+  if (config_.method != Method::kVerlet) return;
+  // Position Verlet stores the half-step velocity (x_n - x_{n-1}) / h. Starting it at
+  // v0 - g h / 2, i.e. x_prev = x0 - v0 h + g h^2 / 2, makes free fall exact (reference case 1).
+  const double h = dt / config_.substeps;
+  for (int i = 0; i < particles.size(); ++i) {
+    if (!particles.isKinematic(i)) particles.velocity[i] -= 0.5 * h * config_.gravity;
+  }
+}
+
+double Solver::pbdStiffness(double k) const {
+  // Mueller et al. 2007, sec. 3.3: k' = 1 - (1 - k)^(1/n) makes the stiffness after n passes
+  // independent of n (it still depends on dt).
+  return 1.0 - std::pow(1.0 - k, 1.0 / config_.iterations);
+}
+
+// Velocity kept over a substep by the damping dv/dt = -c v, integrated exactly: e^{-c h}. Unlike
+// 1 - c h it never turns negative and is the same for any split of a step into substeps.
+double Solver::dampingFactor(double h) const { return std::exp(-config_.damping * h); }
+
+// Predict (seed: Verlet step; PBD: symplectic Euler): damp the carried velocity, v = e^{-c h} v +
+// h g, x += h v. Damping acts on the velocity the particle carries, not on this substep's gravity
+// increment: a body at rest feels the full g h^2 and a damped link settles at the undamped static
+// stretch (a viscous damper exerts no force at rest; REFERENCE_CASES.md case 6). Kinematic
+// particles take their prescribed position at fraction s_end of the step instead.
+void Solver::predict(double h, double s_end, Particles& p) {
+  const double keep = dampingFactor(h);
+  const Vec3 dv = h * config_.gravity;
+  for (int i = 0; i < p.size(); ++i) {
+    p.substep_start[i] = p.position[i];
+    if (p.inverse_mass[i] == 0.0) {
+      p.position[i] = (1.0 - s_end) * p.kinematic_from[i] + s_end * p.kinematic_to[i];
+      continue;
+    }
+    p.velocity[i] = keep * p.velocity[i] + dv;
+    p.position[i] += h * p.velocity[i];
+    predicted_[i] = p.position[i];
+  }
+}
+
+// Jacobi with averaging scales constraint c's multiplier step by w / max_k n_k over its free
+// particles k (n_k = number of constraints on particle k, w = solver.relaxation). This is the
+// averaging of Bender et al. 2017, eq. 48 (dx_i = w / n_i sum_c dx_i^c) applied per constraint
+// instead of per particle: both ends get the same scaled step and lambda accumulates exactly what
+// was applied, so momentum is conserved and the fixed point is the XPBD solution
+// x - x~ = M^-1 grad C^T lambda, C + alpha~ lambda = 0. Per-particle averaging moves a particle
+// with n_i constraints as if its mass were n_i / w times larger, and an XPBD chain then settles at
+// n_i / w times the stretch alpha T (REFERENCE_CASES.md case 6). For one particle under K
+// constraints the two are the same: x <- (1 - w) d (case 7). For distance constraints (unit
+// gradients) it converges for 0 < w < 2: linearized, the scaled step is a Richardson iteration on
+// (J M^-1 J^T + alpha~) lambda = -C with the diagonal preconditioner D = (w_i + w_j + alpha~) max n
+// / w, and 2D - A is diagonally dominant (Gershgorin), hence positive definite.
+double Solver::jacobiScale(int i, int j) const {
+  return config_.relaxation / std::max({1, jacobi_count_[i], jacobi_count_[j]});
+}
+
+// Stretch constraints C = |x_i - x_j| - l0 (seed eq. C2). verlet: rigid projection weighted by
+// inverse mass (the seed's stick, x1 -= w1/(w1+w2) C n); pbd: the same scaled by k';
+// xpbd: dlambda = (-C - alpha~ lambda) / (w_i + w_j + alpha~), alpha~ = alpha / h^2 (XPBD eq. 18).
+double Solver::projectStretch(double h, Particles& p, const ClothTopology& topology) {
+  const bool xpbd = config_.method == Method::kXpbd;
+  const bool jacobi = config_.ordering == Ordering::kJacobi;
+  const bool average = jacobi && config_.jacobi_averaging;
+  const double alpha = xpbd ? stretch_compliance_ / (h * h) : 0.0;
+  const double k = config_.method == Method::kPbd ? pbdStiffness(config_.stretch_stiffness) : 1.0;
+  double max_change = 0.0;
+  const int count = static_cast<int>(topology.stretch.size());
+  for (int c = 0; c < count; ++c) {
+    const DistanceConstraint& con = topology.stretch[c];
+    const double wi = p.inverse_mass[con.i], wj = p.inverse_mass[con.j];
+    const double w = wi + wj;
+    if (w < kMinInverseMass) continue;
+    const Vec3 delta = p.position[con.i] - p.position[con.j];
+    const double length = delta.norm();
+    if (length < kMinLength) continue;
+    const Vec3 n = delta / length;
+    const double constraint = length - con.rest_length;
+    double dlambda =
+        xpbd ? (-constraint - alpha * stretch_lambda_[c]) / (w + alpha) : -k * constraint / w;
+    if (average) dlambda *= jacobiScale(con.i, con.j);
+    stretch_lambda_[c] += dlambda;
+    const Vec3 correction = dlambda * n;
+    max_change = std::max(max_change, std::abs(dlambda) * std::max(wi, wj));
+    if (jacobi) {
+      jacobi_delta_[con.i] += wi * correction;
+      jacobi_delta_[con.j] -= wj * correction;
+    } else {
+      p.position[con.i] += wi * correction;
+      p.position[con.j] -= wj * correction;
+    }
+  }
+  return max_change;
+}
+
+// Isometric bending C = scale |b|, b = sum_k K_k x_k, grad_k C = scale K_k b / |b|. A flat hinge
+// (|b| = 0) already satisfies C = 0 and is skipped: no division by zero.
+double Solver::projectBend(double h, Particles& p, const ClothTopology& topology) {
+  if (bend_compliance_ < 0.0 || config_.method == Method::kMassSpring) return 0.0;
+  const bool xpbd = config_.method == Method::kXpbd;
+  const bool jacobi = config_.ordering == Ordering::kJacobi;
+  const bool average = jacobi && config_.jacobi_averaging;
+  const double alpha = xpbd ? bend_compliance_ / (h * h) : 0.0;
+  const double k = xpbd ? 1.0 : pbdStiffness(config_.bend_stiffness);
+  double max_change = 0.0;
+  const int count = static_cast<int>(topology.bend.size());
+  for (int c = 0; c < count; ++c) {
+    const BendConstraint& con = topology.bend[c];
+    const Vec3 b = bendVector(con, p);
+    double w = 0.0;
+    for (int v = 0; v < 4; ++v) {
+      w += p.inverse_mass[con.index[v]] * con.weight[v] * con.weight[v];
+    }
+    const double b_norm = b.norm();
+    w *= con.scale * con.scale;
+    if (b_norm < kMinLength || w < kMinInverseMass) continue;
+    const double constraint = con.scale * b_norm;
+    double dlambda =
+        xpbd ? (-constraint - alpha * bend_lambda_[c]) / (w + alpha) : -k * constraint / w;
+    if (average) {
+      dlambda *= std::min(jacobiScale(con.index[0], con.index[1]),
+                          jacobiScale(con.index[2], con.index[3]));
+    }
+    bend_lambda_[c] += dlambda;
+    const Vec3 direction = (dlambda * con.scale / b_norm) * b;
+    for (int v = 0; v < 4; ++v) {
+      const int i = con.index[v];
+      const Vec3 dx = (p.inverse_mass[i] * con.weight[v]) * direction;
+      max_change = std::max(max_change, dx.norm());
+      if (jacobi) {
+        jacobi_delta_[i] += dx;
+      } else {
+        p.position[i] += dx;
+      }
+    }
+  }
+  return max_change;
+}
+
+namespace {
+
+// Projection of x onto the ball |x - a| <= r (tethers are unilateral). Returns the distance moved.
+double projectIntoBall(Vec3& x, const Vec3& a, double r) {
+  const Vec3 delta = x - a;
+  const double length = delta.norm();
+  if (length <= r * (1.0 + kTetherSlack) || length < kMinLength) return 0.0;
+  x -= ((length - r) / length) * delta;
+  return length - r;
+}
+
+// Nearest point of the lens |x - a| <= ra, |x - b| <= rb (the case of two pinned corners). When
+// neither single-ball projection lies in the other ball, the nearest point is on the circle where
+// the spheres meet: centre a + t u, radius sqrt(ra^2 - t^2), t = (D^2 + ra^2 - rb^2) / (2D). Balls
+// that only touch (a particle of the top row between two pins at their rest distance) make that
+// circle a point, where alternating projections would only creep towards it. Balls that do not
+// meet (anchors pulled apart beyond the rest distance) have no feasible point: the particle then
+// goes to the point of the axis that splits the excess in proportion to the radii.
+double projectIntoLens(Vec3& x, const Vec3& a, double ra, const Vec3& b, double rb) {
+  const Vec3 start = x;
+  Vec3 pa = x, pb = x;
+  projectIntoBall(pa, a, ra);
+  projectIntoBall(pb, b, rb);
+  const bool pa_in_b = (pa - b).norm() <= rb * (1.0 + kTetherSlack);
+  const bool pb_in_a = (pb - a).norm() <= ra * (1.0 + kTetherSlack);
+  if (pa_in_b || pb_in_a) {
+    // Both candidates feasible: the nearer one (only possible when x is already inside both).
+    x = (pa_in_b && (!pb_in_a || (pa - start).squaredNorm() <= (pb - start).squaredNorm())) ? pa
+                                                                                            : pb;
+    return (x - start).norm();
+  }
+  const Vec3 axis = b - a;
+  const double distance = axis.norm();
+  if (distance < kMinLength) return 0.0;  // coincident anchors of different radii: nothing to do
+  const Vec3 u = axis / distance;
+  if (distance >= ra + rb) {
+    x = a + (ra / (ra + rb) * distance) * u;
+    return (x - start).norm();
+  }
+  const double t = (distance * distance + ra * ra - rb * rb) / (2.0 * distance);
+  const double rho = std::sqrt(std::max(0.0, ra * ra - t * t));
+  Vec3 radial = (x - a) - (x - a).dot(u) * u;
+  const double radial_length = radial.norm();
+  radial = radial_length > kMinLength ? Vec3(radial / radial_length) : u.unitOrthogonal();
+  x = a + t * u + rho * radial;
+  return (x - start).norm();
+}
+
+}  // namespace
+
+// Long-range attachments (Kim et al. 2012): unilateral, only the free particle moves, so a
+// tether never fights the anchor. A particle with several anchors must end inside the
+// intersection of their balls, and projecting onto one ball can push it out of another: its
+// tethers (contiguous in the list) are solved together, by rounds of a two-constraint active set:
+// a = the most violated tether; if the projection into a's ball violates another, b = the worst of
+// those, and the particle goes to the nearest point of the lens of a and b. Two anchors (two pinned
+// corners, the common case) are solved exactly in one round, including the touching balls of a
+// taut row where plain alternating projections only creep towards the single feasible point.
+double Solver::projectTethers(Particles& p, const ClothTopology& topology) {
+  constexpr int kMaxRounds = 16;
+  const std::vector<Tether>& tethers = topology.tethers;
+  const std::size_t count = tethers.size();
+  // The most violated tether of [begin, end) at y, other than `skip`; -1 when none is violated.
+  // Anchors no longer kinematic (a released gripper, until the list is rebuilt) are ignored.
+  auto worst = [&](std::size_t begin, std::size_t end, const Vec3& y, std::size_t skip) {
+    int found = -1;
+    double largest = 0.0;
+    for (std::size_t t = begin; t < end; ++t) {
+      const Tether& tether = tethers[t];
+      if (t == skip || p.inverse_mass[tether.anchor] != 0.0) continue;
+      const double excess = (y - p.position[tether.anchor]).norm() - tether.max_length;
+      if (excess > tether.max_length * kTetherSlack && excess > largest) {
+        largest = excess;
+        found = static_cast<int>(t);
+      }
+    }
+    return found;
+  };
+  double max_change = 0.0;
+  std::size_t end = 0;
+  for (std::size_t begin = 0; begin < count; begin = end) {
+    const int particle = tethers[begin].particle;
+    end = begin + 1;
+    while (end < count && tethers[end].particle == particle) ++end;
+    if (p.inverse_mass[particle] == 0.0) continue;
+    Vec3& x = p.position[particle];
+    for (int round = 0; round < kMaxRounds; ++round) {
+      const int a = worst(begin, end, x, count);
+      if (a < 0) break;
+      const Tether& ta = tethers[a];
+      Vec3 projected = x;
+      const double moved = projectIntoBall(projected, p.position[ta.anchor], ta.max_length);
+      const int b = worst(begin, end, projected, static_cast<std::size_t>(a));
+      if (b < 0) {
+        x = projected;
+        max_change = std::max(max_change, moved);
+        break;
+      }
+      const Tether& tb = tethers[b];
+      max_change = std::max(max_change, projectIntoLens(x, p.position[ta.anchor], ta.max_length,
+                                                        p.position[tb.anchor], tb.max_length));
+    }
+  }
+  return max_change;
+}
+
+// Jacobi: every correction of a pass was computed from the same positions and is applied here at
+// once. The averaging (jacobiScale) is already in each constraint's step; without averaging the
+// corrections are simply summed (REFERENCE_CASES.md case 7: x <- (1 - K) d).
+void Solver::applyJacobi(Particles& p, double& max_change) {
+  for (int i = 0; i < p.size(); ++i) {
+    if (jacobi_count_[i] == 0) continue;
+    p.position[i] += jacobi_delta_[i];
+    max_change = std::max(max_change, jacobi_delta_[i].norm());
+    jacobi_delta_[i].setZero();
+  }
+}
+
+// n_k of the Jacobi averaging: the stretch and bending constraints acting on each free particle.
+// The kinematic set is fixed during a step, so this runs once per step.
+void Solver::countJacobiConstraints(const Particles& p, const ClothTopology& topology) {
+  std::fill(jacobi_count_.begin(), jacobi_count_.end(), 0);
+  for (const DistanceConstraint& con : topology.stretch) {
+    if (!p.isKinematic(con.i)) ++jacobi_count_[con.i];
+    if (!p.isKinematic(con.j)) ++jacobi_count_[con.j];
+  }
+  if (bend_compliance_ < 0.0 || config_.method == Method::kMassSpring) return;
+  for (const BendConstraint& con : topology.bend) {
+    for (int v = 0; v < 4; ++v) {
+      if (!p.isKinematic(con.index[v])) ++jacobi_count_[con.index[v]];
+    }
+  }
+}
+
+double Solver::projectPass(double h, Particles& p, const ClothTopology& topology,
+                           Collisions& collisions, bool /*first_pass*/) {
+  double max_change = projectStretch(h, p, topology);
+  max_change = std::max(max_change, projectBend(h, p, topology));
+  if (config_.ordering == Ordering::kJacobi) applyJacobi(p, max_change);
+  max_change = std::max(max_change, projectTethers(p, topology));
+  // Contacts last in each pass so the positions a pass ends with are free of penetration.
+  max_change = std::max(max_change, collisions.project(p, topology));
+  return max_change;
+}
+
+// Velocity update of PBD, v = (x - x_prev) / h; for Verlet this is the implicit velocity
+// x_n - x_{n-1} the next step adds. Written as v = v~ + (x - x~) / h, x~ = x_prev + h v~ the
+// prediction: the same value, but a particle no constraint moved keeps its velocity exactly
+// instead of re-deriving it from two large positions (1e4 m from the origin, x - x_prev loses 1e-9
+// of v per substep to rounding, 1.5e-5 m over a 1 s fall at 6 kHz; REFERENCE_CASES.md,
+// "Precision"). Kinematic particles take the velocity of their prescribed motion.
+void Solver::updateVelocities(double h, Particles& p) {
+  const double inv_h = 1.0 / h;
+  for (int i = 0; i < p.size(); ++i) {
+    if (p.inverse_mass[i] == 0.0) {
+      p.velocity[i] = (p.position[i] - p.substep_start[i]) * inv_h;
+    } else {
+      p.velocity[i] += (p.position[i] - predicted_[i]) * inv_h;
+    }
+  }
+}
+
+// The explicit baseline: spring and damper forces, then symplectic Euler. Stable only while
+// w_max h < 2 (REFERENCE_CASES.md case 8). Contacts are still projected, so the chart compares the
+// cloth model, not the collision handling.
+void Solver::massSpringSubstep(double h, double s_end, Particles& p, const ClothTopology& topology,
+                               Collisions& collisions) {
+  const double k = config_.spring_stiffness, damper = config_.spring_damping;
+  for (int i = 0; i < p.size(); ++i) force_[i] = p.mass[i] * config_.gravity;
+  for (const DistanceConstraint& con : topology.stretch) {
+    const Vec3 delta = p.position[con.i] - p.position[con.j];
+    const double length = delta.norm();
+    if (length < kMinLength) continue;
+    const Vec3 n = delta / length;
+    const double relative_speed = (p.velocity[con.i] - p.velocity[con.j]).dot(n);
+    const Vec3 f = (-k * (length - con.rest_length) - damper * relative_speed) * n;
+    force_[con.i] += f;
+    force_[con.j] -= f;
+  }
+  if (bend_compliance_ >= 0.0) {
+    // Bending springs on the isometric energy E = k_b / 2 scale^2 |b|^2: F_k = -k_b scale^2 K_k b.
+    for (const BendConstraint& con : topology.bend) {
+      const Vec3 b = bendVector(con, p);
+      if (b.norm() < kMinLength) continue;  // flat: no force but rounding noise (as projectBend)
+      const Vec3 f = -config_.bend_spring_stiffness * con.scale * con.scale * b;
+      for (int v = 0; v < 4; ++v) force_[con.index[v]] += con.weight[v] * f;
+    }
+  }
+  const double keep = dampingFactor(h);
+  for (int i = 0; i < p.size(); ++i) {
+    p.substep_start[i] = p.position[i];
+    if (p.inverse_mass[i] == 0.0) {
+      p.position[i] = (1.0 - s_end) * p.kinematic_from[i] + s_end * p.kinematic_to[i];
+      continue;
+    }
+    p.velocity[i] = keep * p.velocity[i] + h * p.inverse_mass[i] * force_[i];
+    p.position[i] += h * p.velocity[i];
+    predicted_[i] = p.position[i];
+  }
+  for (int pass = 0; pass < config_.iterations; ++pass) {
+    ++stats_.iterations;
+    if (collisions.project(p, topology) <= config_.tolerance) break;
+  }
+}
+
+void Solver::step(double dt, Particles& p, const ClothTopology& topology, Collisions& collisions) {
+  const auto t_start = Clock::now();
+  const int substeps = config_.substeps;
+  const double h = dt / substeps;
+  stats_.substeps = substeps;
+  stats_.iterations = 0;
+  stats_.predict_time = stats_.collide_time = stats_.project_time = stats_.update_time = 0.0;
+  p.step_start = p.position;
+  if (config_.ordering == Ordering::kJacobi) countJacobiConstraints(p, topology);
+
+  // Find contacts once per step; every substep enforces them (Jolt's "collide" phase).
+  auto t0 = Clock::now();
+  collisions.beginStep(p, topology, dt);
+  auto t1 = Clock::now();
+  stats_.collide_time += seconds(t0, t1);
+
+  for (int s = 0; s < substeps; ++s) {
+    const double s_begin = static_cast<double>(s) / substeps;
+    const double s_end = static_cast<double>(s + 1) / substeps;
+    collisions.setSubstepFraction(s_begin, s_end);
+    t0 = Clock::now();
+    if (config_.method == Method::kMassSpring) {
+      massSpringSubstep(h, s_end, p, topology, collisions);
+      t1 = Clock::now();
+      stats_.project_time += seconds(t0, t1);
+      updateVelocities(h, p);
+      stats_.update_time += seconds(t1, Clock::now());
+      continue;
+    }
+    predict(h, s_end, p);
+    t1 = Clock::now();
+    stats_.predict_time += seconds(t0, t1);
+
+    // XPBD multipliers start at zero every substep (Small Steps, Algorithm 1).
+    std::fill(stretch_lambda_.begin(), stretch_lambda_.end(), 0.0);
+    std::fill(bend_lambda_.begin(), bend_lambda_.end(), 0.0);
+    for (int pass = 0; pass < config_.iterations; ++pass) {
+      ++stats_.iterations;
+      const double max_change = projectPass(h, p, topology, collisions, pass == 0);
+      // Adaptive count (seed: "measuring the change from last iteration").
+      if (config_.tolerance > 0.0 && max_change < config_.tolerance) break;
+    }
+    const auto t2 = Clock::now();
+    stats_.project_time += seconds(t1, t2);
+    updateVelocities(h, p);
+    stats_.update_time += seconds(t2, Clock::now());
+  }
+
+  // The force each stretch constraint of the last substep exerts on a kinematic end point:
+  // f = grad C^T lambda / h^2 (XPBD sec. 4); for pbd/verlet lambda is the summed correction.
+  for (auto& f : constraint_force_) f.setZero();
+  if (config_.method != Method::kMassSpring) {
+    const double inv_h2 = 1.0 / (h * h);
+    for (std::size_t c = 0; c < topology.stretch.size(); ++c) {
+      const DistanceConstraint& con = topology.stretch[c];
+      const bool ki = p.inverse_mass[con.i] == 0.0, kj = p.inverse_mass[con.j] == 0.0;
+      if (ki == kj) continue;
+      const Vec3 delta = p.position[con.i] - p.position[con.j];
+      const double length = delta.norm();
+      if (length < kMinLength) continue;
+      const Vec3 grad_i = delta / length;  // grad_j = -grad_i
+      const Vec3 f_i = stretch_lambda_[c] * inv_h2 * grad_i;
+      if (ki) constraint_force_[con.i] += f_i;
+      if (kj) constraint_force_[con.j] -= f_i;
+    }
+  }
+  collisions.endStep();
+  stats_.sim_time += dt;
+  stats_.step_wall_time = seconds(t_start, Clock::now());
+}
+
+}  // namespace pbd_cloth

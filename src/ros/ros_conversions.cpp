@@ -1,0 +1,155 @@
+#include "pbd_cloth/ros/ros_conversions.h"
+
+namespace pbd_cloth {
+namespace {
+
+std_msgs::ColorRGBA color(float r, float g, float b) {
+  std_msgs::ColorRGBA c;
+  c.r = r;
+  c.g = g;
+  c.b = b;
+  c.a = 1.0f;  // alpha < 1 turns off depth writes in rviz and the mesh looks inside out
+  return c;
+}
+
+// Fields every marker of this node shares.
+void initMarker(const std_msgs::Header& header, const std::string& ns, int id, int type,
+                visualization_msgs::Marker& marker) {
+  marker.header = header;
+  marker.ns = ns;
+  marker.id = id;
+  marker.type = type;
+  marker.action = visualization_msgs::Marker::ADD;
+  marker.pose.orientation.w = 1.0;  // rviz warns about (and ignores) an unnormalised quaternion
+  marker.scale.x = marker.scale.y = marker.scale.z = 1.0;
+}
+
+}  // namespace
+
+geometry_msgs::Point RosConversions::toPoint(const Vec3& v) {
+  geometry_msgs::Point p;
+  p.x = v.x();
+  p.y = v.y();
+  p.z = v.z();
+  return p;
+}
+
+geometry_msgs::Vector3 RosConversions::toVector3(const Vec3& v) {
+  geometry_msgs::Vector3 m;
+  m.x = v.x();
+  m.y = v.y();
+  m.z = v.z();
+  return m;
+}
+
+geometry_msgs::Pose RosConversions::toPoseMessage(const Pose& pose) {
+  geometry_msgs::Pose msg;
+  msg.position = toPoint(pose.position);
+  msg.orientation.x = pose.orientation.x();
+  msg.orientation.y = pose.orientation.y();
+  msg.orientation.z = pose.orientation.z();
+  msg.orientation.w = pose.orientation.w();
+  return msg;
+}
+
+Pose RosConversions::fromPoseMessage(const geometry_msgs::Pose& msg) {
+  Pose pose;
+  pose.position = Vec3(msg.position.x, msg.position.y, msg.position.z);
+  pose.orientation = Eigen::Quaterniond(msg.orientation.w, msg.orientation.x, msg.orientation.y,
+                                        msg.orientation.z);
+  pose.orientation.normalize();
+  return pose;
+}
+
+void RosConversions::toStatsMessage(const Simulation& sim, SolverStats& msg) {
+  const StepStats& stats = sim.stats();
+  // sim.time() rather than stats.sim_time: it is 0 right after a reset, before the next step.
+  msg.sim_time = sim.time();
+  msg.step_wall_time = stats.step_wall_time;
+  // Before the first step the stats are empty; the configured count is what will run.
+  msg.substeps = stats.substeps > 0 ? stats.substeps : sim.solver().config().substeps;
+  msg.iterations = stats.iterations;
+  msg.max_strain = stats.max_strain;
+  msg.mean_strain = stats.mean_strain;
+  msg.max_penetration = stats.max_penetration;
+  msg.real_time_factor = 0.0;
+  msg.rejected_inputs = 0;
+}
+
+void RosConversions::toStateMessage(const Simulation& sim, ClothState& msg) {
+  const Particles& particles = sim.particles();
+  const int n = particles.size();
+  msg.positions.resize(n);
+  msg.velocities.resize(n);
+  for (int i = 0; i < n; ++i) {
+    msg.positions[i] = toPoint(particles.position[i]);
+    msg.velocities[i] = toVector3(particles.velocity[i]);
+  }
+  const std::vector<unsigned>& triangles = sim.topology().triangles;
+  msg.triangles.assign(triangles.begin(), triangles.end());
+  sim.kinematicIndices(msg.kinematic);
+  toStatsMessage(sim, msg.stats);
+}
+
+bool RosConversions::toMeshMarker(const Simulation& sim, const std_msgs::Header& header,
+                                  visualization_msgs::Marker& marker) {
+  const std::vector<unsigned>& triangles = sim.topology().triangles;
+  if (triangles.empty()) {
+    return false;
+  }
+  initMarker(header, "cloth", 0, visualization_msgs::Marker::TRIANGLE_LIST, marker);
+  marker.color = color(0.85f, 0.35f, 0.2f);
+  marker.colors.clear();
+  const Vec3Array& position = sim.particles().position;
+  marker.points.resize(triangles.size());
+  for (std::size_t k = 0; k < triangles.size(); ++k) {
+    marker.points[k] = toPoint(position[triangles[k]]);
+  }
+  return true;
+}
+
+void RosConversions::toParticleMarkers(const Simulation& sim, const std_msgs::Header& header,
+                                       visualization_msgs::MarkerArray& markers) {
+  const Particles& particles = sim.particles();
+  const SceneConfig& scene = sim.scene();
+
+  visualization_msgs::Marker cloth;
+  initMarker(header, "particles", 0, visualization_msgs::Marker::SPHERE_LIST, cloth);
+  cloth.scale.x = cloth.scale.y = cloth.scale.z = 2.0 * scene.cloth.thickness;
+  cloth.color = color(0.9f, 0.9f, 0.9f);
+  const std_msgs::ColorRGBA free_color = color(0.9f, 0.9f, 0.9f);
+  const std_msgs::ColorRGBA kinematic_color = color(0.1f, 0.4f, 1.0f);
+  cloth.points.resize(particles.cloth_count);
+  cloth.colors.resize(particles.cloth_count);
+  for (int i = 0; i < particles.cloth_count; ++i) {
+    cloth.points[i] = toPoint(particles.position[i]);
+    cloth.colors[i] = particles.isKinematic(i) ? kinematic_color : free_color;
+  }
+  markers.markers.push_back(cloth);
+
+  const int granular_count = particles.size() - particles.cloth_count;
+  if (granular_count <= 0) {
+    return;
+  }
+  visualization_msgs::Marker granular;
+  initMarker(header, "particles", 1, visualization_msgs::Marker::SPHERE_LIST, granular);
+  granular.scale.x = granular.scale.y = granular.scale.z = 2.0 * scene.granular.radius;
+  granular.color = color(0.8f, 0.7f, 0.4f);
+  granular.points.reserve(granular_count);
+  for (int i = particles.cloth_count; i < particles.size(); ++i) {
+    granular.points.push_back(toPoint(particles.position[i]));
+  }
+  markers.markers.push_back(granular);
+}
+
+void RosConversions::toMarkerArray(const Simulation& sim, const std_msgs::Header& header,
+                                   visualization_msgs::MarkerArray& markers) {
+  markers.markers.clear();
+  visualization_msgs::Marker mesh;
+  if (toMeshMarker(sim, header, mesh)) {
+    markers.markers.push_back(mesh);
+  }
+  toParticleMarkers(sim, header, markers);
+}
+
+}  // namespace pbd_cloth

@@ -1,0 +1,489 @@
+// Scene YAML -> SceneConfig with yaml-cpp. The reader is strict on purpose: a misspelt key that is
+// silently ignored leaves a default in place and costs a user an afternoon, so every map is checked
+// against its known keys before anything is read, and every conversion names the dotted key.
+#include "pbd_cloth/scene_yaml.h"
+
+#include <algorithm>
+#include <cctype>
+#include <climits>
+#include <cmath>
+#include <set>
+#include <vector>
+
+namespace pbd_cloth {
+namespace {
+
+using Names = std::vector<std::string>;
+
+std::string joinNames(const Names& names) {
+  std::string out;
+  for (const std::string& name : names) out += (out.empty() ? "" : ", ") + name;
+  return out;
+}
+
+std::string indexed(const std::string& key, std::size_t index) {
+  return key + "[" + std::to_string(index) + "]";
+}
+
+// What a node is, for "expected X, got Y" messages.
+std::string describe(const YAML::Node& node) {
+  switch (node.Type()) {
+    case YAML::NodeType::Scalar:
+      return "'" + node.Scalar() + "'";
+    case YAML::NodeType::Sequence:
+      return "a list of " + std::to_string(node.size());
+    case YAML::NodeType::Map:
+      return "a map";
+    default:
+      return "nothing (null)";
+  }
+}
+
+[[noreturn]] void wrongType(const YAML::Node& node, const std::string& key,
+                            const std::string& expected) {
+  throw ConfigError(key, "must be " + expected + ", got " + describe(node));
+}
+
+// --- Scalars and small lists -------------------------------------------------------------------
+// convert<T>::decode reports failure instead of throwing, so each failure is reported once, here,
+// with the key. It also rejects trailing text ("1.5 m") and accepts .inf/.nan, left to validate().
+
+double toDouble(const YAML::Node& node, const std::string& key) {
+  double value = 0.0;
+  if (!node.IsScalar() || !YAML::convert<double>::decode(node, value)) {
+    wrongType(node, key, "a number");
+  }
+  return value;
+}
+
+// Integers written as 10.0 (or by a tool that stores every number as a double) are accepted when
+// they are integral.
+int toInt(const YAML::Node& node, const std::string& key) {
+  long long integer = 0;
+  if (node.IsScalar() && YAML::convert<long long>::decode(node, integer)) {
+    if (integer < INT_MIN || integer > INT_MAX) wrongType(node, key, "an integer of int range");
+    return static_cast<int>(integer);
+  }
+  double real = 0.0;
+  if (!node.IsScalar() || !YAML::convert<double>::decode(node, real) || real != std::floor(real)) {
+    wrongType(node, key, "an integer");
+  }
+  if (real < INT_MIN || real > INT_MAX) wrongType(node, key, "an integer of int range");
+  return static_cast<int>(real);
+}
+
+bool toBool(const YAML::Node& node, const std::string& key) {
+  bool value = false;
+  if (!node.IsScalar() || !YAML::convert<bool>::decode(node, value)) {
+    wrongType(node, key, "true or false");
+  }
+  return value;
+}
+
+// `tf_frame:` with nothing after it reads as null; it means the empty string.
+std::string toText(const YAML::Node& node, const std::string& key) {
+  if (node.IsNull()) return std::string();
+  if (!node.IsScalar()) wrongType(node, key, "a string");
+  return node.Scalar();
+}
+
+// The numbers of a fixed-length list; element errors name the element (cloth.origin[1]).
+std::vector<double> toNumbers(const YAML::Node& node, const std::string& key, std::size_t count,
+                              const char* layout) {
+  if (!node.IsSequence() || node.size() != count) {
+    wrongType(node, key, "a list of " + std::to_string(count) + " numbers " + layout);
+  }
+  std::vector<double> out(count);
+  for (std::size_t k = 0; k < count; ++k) out[k] = toDouble(node[k], indexed(key, k));
+  return out;
+}
+
+Eigen::Vector3d toVector3(const YAML::Node& node, const std::string& key) {
+  const std::vector<double> v = toNumbers(node, key, 3, "[x, y, z]");
+  return Eigen::Vector3d(v[0], v[1], v[2]);
+}
+
+Pose toPose(const YAML::Node& node, const std::string& key) {
+  const std::vector<double> v = toNumbers(node, key, 7, "[x, y, z, qx, qy, qz, qw]");
+  Pose pose;
+  pose.position = Eigen::Vector3d(v[0], v[1], v[2]);
+  // Eigen's constructor takes w first; the YAML layout is ROS's (x, y, z, w).
+  pose.orientation = Eigen::Quaterniond(v[6], v[3], v[4], v[5]);
+  const double norm = pose.orientation.norm();
+  // Written as !(norm > 0) so that a NaN quaternion is refused here too.
+  if (!(norm > 0.0) || !std::isfinite(norm)) {
+    throw ConfigError(key, "the quaternion (qx, qy, qz, qw) must be finite and non-zero");
+  }
+  // Hand-written quaternions (0.707 instead of sqrt(0.5)) are slightly off unit length; rotations
+  // and slerp assume unit length.
+  pose.orientation.normalize();
+  return pose;
+}
+
+// One of the words toString(E) gives for `values`.
+template <typename E>
+E toWord(const YAML::Node& node, const std::string& key, std::initializer_list<E> values) {
+  Names words;
+  for (E value : values) words.push_back(toString(value));
+  const std::string word = node.IsScalar() ? node.Scalar() : std::string();
+  for (E value : values) {
+    if (word == toString(value)) return value;
+  }
+  wrongType(node, key, "one of " + joinNames(words));
+}
+
+// --- Maps ----------------------------------------------------------------------------------------
+
+// One map of the scene tree and its dotted key. The constructor refuses unknown and repeated keys
+// (yaml-cpp keeps both copies of a repeated key and lookups see only the first), so the reads below
+// only look up known names. A null or absent map reads as an empty one: its keys keep defaults.
+class MapReader {
+ public:
+  MapReader(const YAML::Node& node, std::string key, Names allowed, const Names& ignored = {})
+      : node_(node), key_(std::move(key)), allowed_(std::move(allowed)) {
+    if (!node_ || node_.IsNull()) return;
+    if (!node_.IsMap()) wrongType(node_, where(), "a map with keys " + joinNames(allowed_));
+    std::set<std::string> seen;
+    for (const auto& entry : node_) {
+      if (!entry.first.IsScalar()) wrongType(entry.first, where(), "a map with plain-text keys");
+      const std::string& name = entry.first.Scalar();
+      if (!seen.insert(name).second) throw ConfigError(keyOf(name), "given twice");
+      if (std::find(ignored.begin(), ignored.end(), name) != ignored.end()) continue;
+      if (std::find(allowed_.begin(), allowed_.end(), name) == allowed_.end()) {
+        throw ConfigError(keyOf(name), "unknown key (known here: " + joinNames(allowed_) + ")");
+      }
+    }
+  }
+
+  std::string keyOf(const std::string& name) const {
+    return key_.empty() ? name : key_ + "." + name;
+  }
+  // The node of `name`; an undefined node when the key is absent.
+  YAML::Node get(const std::string& name) const {
+    // A default YAML::Node() is a defined null, so absence is a lookup in an empty const map.
+    static const YAML::Node kEmpty(YAML::NodeType::Map);
+    const YAML::Node& map = node_ && node_.IsMap() ? node_ : kEmpty;
+    return map[name];
+  }
+  bool has(const std::string& name) const { return static_cast<bool>(get(name)); }
+  YAML::Node require(const std::string& name) const {
+    if (!has(name)) throw ConfigError(keyOf(name), "required");
+    return get(name);
+  }
+  // Names present here, for the per-shape key check of obstacles.
+  Names present() const {
+    Names names;
+    if (node_ && node_.IsMap()) {
+      for (const auto& entry : node_) names.push_back(entry.first.Scalar());
+    }
+    return names;
+  }
+
+  void read(const std::string& name, double& out) const { readWith(name, out, toDouble); }
+  void read(const std::string& name, int& out) const { readWith(name, out, toInt); }
+  void read(const std::string& name, bool& out) const { readWith(name, out, toBool); }
+  void read(const std::string& name, std::string& out) const { readWith(name, out, toText); }
+  void read(const std::string& name, Eigen::Vector3d& out) const { readWith(name, out, toVector3); }
+  void read(const std::string& name, Pose& out) const { readWith(name, out, toPose); }
+
+ private:
+  std::string where() const { return key_.empty() ? "scene" : key_; }
+
+  template <typename T, typename Convert>
+  void readWith(const std::string& name, T& out, Convert convert) const {
+    if (const YAML::Node node = get(name)) out = convert(node, keyOf(name));
+  }
+
+  YAML::Node node_;
+  std::string key_;
+  Names allowed_;
+};
+
+// A list value; null or absent reads as an empty list.
+YAML::Node listOf(const MapReader& map, const std::string& name, const char* expected) {
+  const YAML::Node node = map.get(name);
+  if (!node || node.IsNull()) return YAML::Node(YAML::NodeType::Sequence);
+  if (!node.IsSequence()) wrongType(node, map.keyOf(name), expected);
+  return node;
+}
+
+// --- Sections ------------------------------------------------------------------------------------
+
+void readSolver(const YAML::Node& node, SolverConfig& s) {
+  const MapReader map(
+      node, "solver",
+      {"method", "substeps", "iterations", "tolerance", "ordering", "relaxation",
+       "jacobi_averaging", "gravity", "damping", "stretch_stiffness", "bend_stiffness",
+       "spring_stiffness", "spring_damping", "bend_spring_stiffness"});
+  if (map.has("method")) {
+    s.method = toWord(map.get("method"), map.keyOf("method"),
+                      {Method::kXpbd, Method::kPbd, Method::kVerlet, Method::kMassSpring});
+  }
+  if (map.has("ordering")) {
+    s.ordering = toWord(map.get("ordering"), map.keyOf("ordering"),
+                        {Ordering::kGaussSeidel, Ordering::kJacobi});
+  }
+  map.read("substeps", s.substeps);
+  map.read("iterations", s.iterations);
+  map.read("tolerance", s.tolerance);
+  map.read("relaxation", s.relaxation);
+  map.read("jacobi_averaging", s.jacobi_averaging);
+  map.read("gravity", s.gravity);
+  map.read("damping", s.damping);
+  map.read("stretch_stiffness", s.stretch_stiffness);
+  map.read("bend_stiffness", s.bend_stiffness);
+  map.read("spring_stiffness", s.spring_stiffness);
+  map.read("spring_damping", s.spring_damping);
+  map.read("bend_spring_stiffness", s.bend_spring_stiffness);
+}
+
+void readCloth(const YAML::Node& node, ClothConfig& c) {
+  const MapReader map(
+      node, "cloth",
+      {"rows", "cols", "spacing", "mass", "origin", "rpy", "stretch_compliance", "bend_compliance",
+       "thickness", "self_collision", "friction", "pinned", "point_masses", "tethers", "shear"});
+  map.read("rows", c.rows);
+  map.read("cols", c.cols);
+  map.read("spacing", c.spacing);
+  map.read("mass", c.mass);
+  map.read("origin", c.origin);
+  map.read("rpy", c.rpy);
+  map.read("stretch_compliance", c.stretch_compliance);
+  map.read("bend_compliance", c.bend_compliance);
+  map.read("thickness", c.thickness);
+  map.read("self_collision", c.self_collision);
+  map.read("tethers", c.tethers);
+  map.read("shear", c.shear);
+
+  const MapReader friction(map.get("friction"), map.keyOf("friction"), {"static", "kinetic"});
+  friction.read("static", c.friction.static_coefficient);
+  friction.read("kinetic", c.friction.kinetic_coefficient);
+
+  if (map.has("pinned")) {
+    const YAML::Node pinned = listOf(map, "pinned", "a list of particle indices");
+    c.pinned.clear();
+    for (std::size_t k = 0; k < pinned.size(); ++k) {
+      c.pinned.push_back(toInt(pinned[k], indexed("cloth.pinned", k)));
+    }
+  }
+  if (map.has("point_masses")) {
+    const YAML::Node masses = listOf(map, "point_masses", "a list of [index, kg] pairs");
+    c.point_masses.clear();
+    for (std::size_t k = 0; k < masses.size(); ++k) {
+      const std::string key = indexed("cloth.point_masses", k);
+      const YAML::Node pair = masses[k];
+      if (!pair.IsSequence() || pair.size() != 2) wrongType(pair, key, "a pair [index, kg]");
+      c.point_masses.emplace_back(toInt(pair[0], indexed(key, 0)),
+                                  toDouble(pair[1], indexed(key, 1)));
+    }
+  }
+}
+
+void readGranular(const YAML::Node& node, GranularConfig& g) {
+  const MapReader map(node, "granular", {"count", "radius", "mass", "region"});
+  map.read("count", g.count);
+  map.read("radius", g.radius);
+  map.read("mass", g.mass);
+  const MapReader region(map.get("region"), map.keyOf("region"), {"min", "max"});
+  region.read("min", g.region_min);
+  region.read("max", g.region_max);
+}
+
+Waypoint readWaypoint(const YAML::Node& node, const std::string& key) {
+  const MapReader map(node, key, {"t", "pose", "grasp"});
+  if (!node || node.IsNull()) wrongType(node, key, "a map {t, pose, grasp}");
+  Waypoint w;
+  w.t = toDouble(map.require("t"), map.keyOf("t"));
+  w.pose = toPose(map.require("pose"), map.keyOf("pose"));
+  if (map.has("grasp")) w.grasp = toBool(map.get("grasp"), map.keyOf("grasp")) ? 1 : 0;
+  return w;
+}
+
+GripperConfig readGripper(const YAML::Node& node, const std::string& key) {
+  const MapReader map(node, key, {"name", "radius", "tf_frame", "trajectory"});
+  if (!node || node.IsNull()) wrongType(node, key, "a map {name, radius, tf_frame, trajectory}");
+  GripperConfig g;
+  map.read("name", g.name);
+  map.read("radius", g.radius);
+  map.read("tf_frame", g.tf_frame);
+  const YAML::Node trajectory = listOf(map, "trajectory", "a list of waypoints {t, pose, grasp}");
+  for (std::size_t k = 0; k < trajectory.size(); ++k) {
+    g.trajectory.push_back(readWaypoint(trajectory[k], indexed(map.keyOf("trajectory"), k)));
+  }
+  return g;
+}
+
+// The keys each shape takes besides name, shape and pose. A key of another shape (a radius on a
+// box) is refused: it would otherwise be ignored while the user believes it acts.
+Names shapeKeys(ShapeType shape) {
+  switch (shape) {
+    case ShapeType::kSphere:
+      return {"radius"};
+    case ShapeType::kBox:
+      return {"size"};
+    case ShapeType::kCapsule:
+      return {"radius", "length"};
+    case ShapeType::kPlane:
+      return {"normal", "offset"};
+  }
+  return {};
+}
+
+ObstacleConfig readObstacle(const YAML::Node& node, const std::string& key) {
+  const Names common = {"name", "shape", "pose"};
+  const MapReader map(node, key,
+                      {"name", "shape", "pose", "radius", "size", "length", "normal", "offset"});
+  if (!node || node.IsNull()) wrongType(node, key, "a map {name, shape, ...}");
+  ObstacleConfig o;
+  o.shape = toWord(map.require("shape"), map.keyOf("shape"),
+                   {ShapeType::kSphere, ShapeType::kBox, ShapeType::kCapsule, ShapeType::kPlane});
+  Names allowed = common;
+  for (const std::string& name : shapeKeys(o.shape)) allowed.push_back(name);
+  for (const std::string& name : map.present()) {
+    if (std::find(allowed.begin(), allowed.end(), name) == allowed.end()) {
+      throw ConfigError(map.keyOf(name), std::string("not used by a ") + toString(o.shape) +
+                                             " (it takes " + joinNames(allowed) + ")");
+    }
+  }
+  map.read("name", o.name);
+  map.read("pose", o.pose);
+  map.read("radius", o.radius);
+  map.read("size", o.size);
+  map.read("length", o.length);
+  map.read("normal", o.normal);
+  map.read("offset", o.offset);
+  return o;
+}
+
+// Top-level keys accepted and ignored: see scene_yaml.h.
+const Names kIgnoredTopLevelKeys = {"description"};
+
+SceneConfig readScene(const YAML::Node& root) {
+  const MapReader map(root, "",
+                      {"frame_id", "step_rate", "publish_rate", "solver", "cloth", "granular",
+                       "grippers", "bounds", "obstacles"},
+                      kIgnoredTopLevelKeys);
+  SceneConfig scene;
+  map.read("frame_id", scene.frame_id);
+  map.read("step_rate", scene.step_rate);
+  map.read("publish_rate", scene.publish_rate);
+  readSolver(map.get("solver"), scene.solver);
+  readCloth(map.get("cloth"), scene.cloth);
+  readGranular(map.get("granular"), scene.granular);
+
+  const YAML::Node grippers = listOf(map, "grippers", "a list of grippers");
+  for (std::size_t k = 0; k < grippers.size(); ++k) {
+    scene.grippers.push_back(readGripper(grippers[k], indexed("grippers", k)));
+  }
+  const YAML::Node obstacles = listOf(map, "obstacles", "a list of obstacles");
+  for (std::size_t k = 0; k < obstacles.size(); ++k) {
+    scene.obstacles.push_back(readObstacle(obstacles[k], indexed("obstacles", k)));
+  }
+
+  const YAML::Node bounds = map.get("bounds");
+  scene.bounds.enabled = bounds && !bounds.IsNull();
+  const MapReader bounds_map(bounds, "bounds", {"min", "max"});
+  bounds_map.read("min", scene.bounds.min);
+  bounds_map.read("max", scene.bounds.max);
+  return scene;
+}
+
+// Splits "a.b.c" into its parts; empty parts ("a..b", ".a") are refused.
+Names splitKey(const std::string& key) {
+  Names parts;
+  std::size_t begin = 0;
+  while (true) {
+    const std::size_t end = key.find('.', begin);
+    parts.push_back(key.substr(begin, end - begin));
+    if (parts.back().empty()) throw ConfigError(key, "empty part in the dotted key");
+    if (end == std::string::npos) return parts;
+    begin = end + 1;
+  }
+}
+
+bool parseIndex(const std::string& part, std::size_t& index) {
+  if (part.empty() || !std::all_of(part.begin(), part.end(), ::isdigit)) return false;
+  index = std::stoul(part);
+  return true;
+}
+
+}  // namespace
+
+SceneConfig sceneFromYaml(const YAML::Node& root) {
+  SceneConfig scene;
+  try {
+    scene = readScene(root);
+  } catch (const YAML::Exception& e) {
+    // Every conversion above names its key; this is the backstop for yaml-cpp surprises.
+    throw ConfigError("scene", e.what());
+  }
+  validate(scene);
+  return scene;
+}
+
+YAML::Node loadSceneYaml(const std::string& path) {
+  try {
+    return YAML::LoadFile(path);
+  } catch (const YAML::BadFile&) {
+    throw ConfigError("file", "cannot read '" + path + "'");
+  } catch (const YAML::Exception& e) {
+    throw ConfigError("file", path + ": " + e.what());
+  }
+}
+
+SceneConfig loadScene(const std::string& path) { return sceneFromYaml(loadSceneYaml(path)); }
+
+void applyOverride(YAML::Node& root, const std::string& assignment) {
+  const std::size_t equals = assignment.find('=');
+  if (equals == std::string::npos || equals == 0) {
+    throw ConfigError("--set",
+                      "expected key=value (e.g. solver.substeps=20), got '" + assignment + "'");
+  }
+  const std::string key = assignment.substr(0, equals);
+  YAML::Node value;
+  try {
+    value = YAML::Load(assignment.substr(equals + 1));
+  } catch (const YAML::Exception& e) {
+    throw ConfigError(key, std::string("cannot parse the value as YAML: ") + e.what());
+  }
+
+  const Names parts = splitKey(key);
+  if (!root || root.IsNull()) root = YAML::Node(YAML::NodeType::Map);
+  // yaml-cpp nodes are references: `node = x` would overwrite the referenced value, reset()
+  // rebinds.
+  YAML::Node node;
+  node.reset(root);
+  std::string path;
+  for (std::size_t k = 0; k < parts.size(); ++k) {
+    const std::string& part = parts[k];
+    const bool last = k + 1 == parts.size();
+    YAML::Node child;
+    std::size_t index = 0;
+    if (node.IsSequence()) {
+      // Index == size appends, so "grippers.1.name=right" can add a second gripper.
+      if (!parseIndex(part, index) || index > node.size()) {
+        throw ConfigError(path + "." + part,
+                          "'" + path + "' is a list of " + std::to_string(node.size()) +
+                              ": use an index in [0, " + std::to_string(node.size()) + "]");
+      }
+      if (last) {
+        node[index] = value;
+        return;
+      }
+      child.reset(node[index]);
+    } else if (node.IsMap() || node.IsNull() || !node.IsDefined()) {
+      // Missing (undefined) maps are created by the assignment at the end of the path.
+      if (last) {
+        node[part] = value;
+        return;
+      }
+      child.reset(node[part]);
+    } else {
+      throw ConfigError(key, "'" + path + "' is a value, not a map or list");
+    }
+    path += (path.empty() ? "" : ".") + part;
+    node.reset(child);
+  }
+}
+
+}  // namespace pbd_cloth

@@ -1,0 +1,550 @@
+// bullet_cloth_bench: the peer on the speed/accuracy charts. Runs the cloth of a scene YAML as a
+// Bullet btSoftBody (position-based links, Bullet's own solver) and prints the same key=value line
+// as cloth_bench, with the metrics computed by the same pbd_cloth functions on the same links.
+// See kUsage.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
+#include <limits>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+// Bullet's headers have unused parameters; this file is built with -Wall -Wextra.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wunused-parameter"
+#include <BulletSoftBody/btDefaultSoftBodySolver.h>
+#include <BulletSoftBody/btSoftBody.h>
+#include <BulletSoftBody/btSoftBodyRigidBodyCollisionConfiguration.h>
+#include <BulletSoftBody/btSoftRigidDynamicsWorld.h>
+#include <btBulletDynamicsCommon.h>
+#pragma GCC diagnostic pop
+
+#include "pbd_cloth/cloth_builder.h"
+#include "pbd_cloth/collisions.h"
+#include "pbd_cloth/metrics.h"
+#include "pbd_cloth/scene_yaml.h"
+
+namespace {
+
+const char kUsage[] =
+    "Usage: bullet_cloth_bench --config <scene.yaml> --duration <s> [options]\n"
+    "Builds the scene's rows x cols cloth as a Bullet btSoftBody (the particle positions, masses\n"
+    "and pins of pbd_cloth::buildScene; one Bullet link per pbd_cloth stretch constraint,\n"
+    "structural then shear, in the same order; pinned particles get mass 0) in a\n"
+    "btSoftRigidDynamicsWorld with the scene's gravity and static obstacles, runs\n"
+    "round(duration * step_rate) steps of 1/step_rate s and prints the key=value line of\n"
+    "cloth_bench (wall_ms_per_step max_strain mean_strain max_penetration self_intersections energy\n"
+    "finite steps ... method=bullet), the metrics computed by pbd_cloth's own functions on the same\n"
+    "stretch links. Only the Bullet step calls are timed. max_strain, max_penetration and\n"
+    "max_self_intersections are maxima over the samples (every step for <= 5000 particles, every\n"
+    "10th otherwise, and the last step); the other metrics are those of the final state.\n"
+    "\n"
+    "Options (as cloth_bench):\n"
+    "  --config <file>        scene YAML (the format of config/hanging.yaml)\n"
+    "  --duration <s>         simulated time, >= 0\n"
+    "  --set <key=value>      override a scene key (solver.substeps=20) or a Bullet knob:\n"
+    "      bullet.substeps=N      internal steps per step, h = dt/N  (default: solver.substeps)\n"
+    "      bullet.piterations=N   position solver passes per internal step (default:\n"
+    "                             solver.iterations)\n"
+    "      bullet.viterations=N   velocity solver passes (default 0, Bullet's default)\n"
+    "      bullet.diterations=N   drift solver passes (default 0, Bullet's default)\n"
+    "      bullet.kLST=x          link stiffness in (0, 1] (default 1: inextensible)\n"
+    "      bullet.kDP=x           damping per internal step in [0, 1) (default: solver.damping * h,\n"
+    "                             the damping of the pbd_cloth solver)\n"
+    "      bullet.bending=0|1     Bullet's bending links (generateBendingConstraints(2)) (default 0)\n"
+    "      bullet.bend_kLST=x     stiffness of those links (default 0.5)\n"
+    "  --csv <file>           t,max_strain,mean_strain,energy,max_penetration per metric sample\n"
+    "  --sample-every <n>     sample the metrics every n steps\n"
+    "  --positions <file>     final positions as index,x,y,z lines\n"
+    "  --mesh <file.obj>      final cloth as a Wavefront OBJ\n"
+    "  --quiet                no progress message on stderr\n"
+    "  --help                 this text\n"
+    "Bullet is built in single precision (Debian's libbullet-dev); grippers and the bounds box are\n"
+    "not simulated (a warning says so), cloth self-collision is off (Bullet needs clusters for it).\n";
+
+constexpr int kLargeScene = 5000;  // particles; above it the metrics are sampled every 10th step
+constexpr double kDivergedStrain = 10.0;  // above it self-intersections are not counted
+
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// Bullet's knobs, set with --set bullet.<name>=<value>. Negative means "from the scene".
+struct BulletKnobs {
+  int substeps = -1;
+  int piterations = -1;
+  int viterations = 0;
+  int diterations = 0;
+  double link_stiffness = 1.0;
+  double damping = -1.0;
+  bool bending = false;
+  double bend_stiffness = 0.5;
+};
+
+struct Options {
+  std::string config;
+  double duration = -1.0;
+  std::vector<std::string> overrides;
+  BulletKnobs bullet;
+  std::string csv;
+  std::string positions;
+  std::string mesh;
+  int sample_every = 0;
+  bool quiet = false;
+};
+
+double parseNumber(const std::string& option, const std::string& text) {
+  std::size_t used = 0;
+  double value = std::numeric_limits<double>::quiet_NaN();
+  try {
+    value = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size()) {
+    throw UsageError(option + ": expected a number, got '" + text + "'");
+  }
+  return value;
+}
+
+int parseCount(const std::string& key, const std::string& text, int low, int high) {
+  const double value = parseNumber(key, text);
+  if (!(value >= low && value <= high && value == std::floor(value))) {
+    throw UsageError(key + ": must be an integer in [" + std::to_string(low) + ", " +
+                     std::to_string(high) + "], got " + text);
+  }
+  return static_cast<int>(value);
+}
+
+double parseFraction(const std::string& key, const std::string& text, bool zero_allowed,
+                     bool one_allowed) {
+  const double value = parseNumber(key, text);
+  const bool above = zero_allowed ? value >= 0.0 : value > 0.0;
+  const bool below = one_allowed ? value <= 1.0 : value < 1.0;
+  if (!(above && below)) {
+    throw UsageError(key + ": must be in " + (zero_allowed ? "[0, " : "(0, ") +
+                     (one_allowed ? "1]" : "1)") + ", got " + text);
+  }
+  return value;
+}
+
+void setKnob(BulletKnobs& knobs, const std::string& assignment) {
+  const std::size_t equals = assignment.find('=');
+  const std::string key = assignment.substr(0, equals);
+  const std::string value = equals == std::string::npos ? "" : assignment.substr(equals + 1);
+  if (key == "bullet.substeps") {
+    knobs.substeps = parseCount(key, value, 1, 100000);
+  } else if (key == "bullet.piterations") {
+    knobs.piterations = parseCount(key, value, 1, 100000);
+  } else if (key == "bullet.viterations") {
+    knobs.viterations = parseCount(key, value, 0, 100000);
+  } else if (key == "bullet.diterations") {
+    knobs.diterations = parseCount(key, value, 0, 100000);
+  } else if (key == "bullet.kLST") {
+    knobs.link_stiffness = parseFraction(key, value, false, true);
+  } else if (key == "bullet.kDP") {
+    knobs.damping = parseFraction(key, value, true, false);
+  } else if (key == "bullet.bending") {
+    knobs.bending = parseCount(key, value, 0, 1) == 1;
+  } else if (key == "bullet.bend_kLST") {
+    knobs.bend_stiffness = parseFraction(key, value, false, true);
+  } else {
+    throw UsageError("unknown Bullet knob '" + key +
+                     "' (substeps, piterations, viterations, diterations, kLST, kDP, bending, "
+                     "bend_kLST)");
+  }
+}
+
+Options parseArguments(int argc, char** argv) {
+  Options options;
+  std::vector<std::string> args(argv + 1, argv + argc);
+  for (std::size_t k = 0; k < args.size(); ++k) {
+    std::string option = args[k];
+    std::string value;
+    bool has_value = false;
+    const std::size_t equals = option.find('=');
+    if (option.rfind("--", 0) == 0 && equals != std::string::npos) {
+      value = option.substr(equals + 1);
+      option = option.substr(0, equals);
+      has_value = true;
+    }
+    auto next = [&]() -> std::string {
+      if (has_value) return value;
+      if (k + 1 >= args.size()) throw UsageError(option + " needs a value");
+      return args[++k];
+    };
+    if (option == "--help" || option == "-h") {
+      std::cout << kUsage;
+      std::exit(0);
+    } else if (option == "--quiet") {
+      options.quiet = true;
+    } else if (option == "--config") {
+      options.config = next();
+    } else if (option == "--duration") {
+      const std::string text = next();
+      options.duration = parseNumber(option, text);
+      if (!std::isfinite(options.duration) || options.duration < 0.0) {
+        throw UsageError("--duration: must be a finite time >= 0 (s), got " + text);
+      }
+    } else if (option == "--set") {
+      const std::string assignment = next();
+      if (assignment.rfind("bullet.", 0) == 0) {
+        setKnob(options.bullet, assignment);
+      } else {
+        options.overrides.push_back(assignment);
+      }
+    } else if (option == "--csv") {
+      options.csv = next();
+    } else if (option == "--positions") {
+      options.positions = next();
+    } else if (option == "--mesh") {
+      options.mesh = next();
+    } else if (option == "--sample-every") {
+      options.sample_every = parseCount(option, next(), 1, 1000000000);
+    } else {
+      throw UsageError("unknown argument '" + args[k] + "'");
+    }
+  }
+  if (options.config.empty()) throw UsageError("--config <scene.yaml> is required");
+  if (options.duration < 0.0) throw UsageError("--duration <s> is required");
+  return options;
+}
+
+std::ofstream openOutput(const std::string& option, const std::string& path) {
+  std::ofstream out;
+  if (path.empty()) return out;
+  out.open(path, std::ios::trunc);
+  if (!out) throw UsageError(option + ": cannot write '" + path + "'");
+  out.precision(std::numeric_limits<double>::max_digits10);
+  return out;
+}
+
+void finishOutput(std::ofstream& out, const std::string& path) {
+  if (!out.is_open()) return;
+  out.close();
+  if (!out) throw std::runtime_error("writing '" + path + "' failed");
+}
+
+btVector3 toBullet(const Eigen::Vector3d& v) {
+  return btVector3(static_cast<btScalar>(v.x()), static_cast<btScalar>(v.y()),
+                   static_cast<btScalar>(v.z()));
+}
+
+btTransform toBullet(const pbd_cloth::Pose& pose) {
+  const Eigen::Quaterniond& q = pose.orientation;
+  return btTransform(btQuaternion(static_cast<btScalar>(q.x()), static_cast<btScalar>(q.y()),
+                                  static_cast<btScalar>(q.z()), static_cast<btScalar>(q.w())),
+                     toBullet(pose.position));
+}
+
+// A Bullet world holding the cloth and the scene's static obstacles. Members are declared in the
+// order Bullet needs them built; they are destroyed in reverse.
+class BulletCloth {
+ public:
+  BulletCloth(const pbd_cloth::SceneConfig& scene, const pbd_cloth::Particles& particles,
+              const pbd_cloth::ClothTopology& topology, const BulletKnobs& knobs)
+      : collision_configuration_(new btSoftBodyRigidBodyCollisionConfiguration()),
+        dispatcher_(new btCollisionDispatcher(collision_configuration_.get())),
+        broadphase_(new btDbvtBroadphase()),
+        constraint_solver_(new btSequentialImpulseConstraintSolver()),
+        soft_body_solver_(new btDefaultSoftBodySolver()),
+        world_(new btSoftRigidDynamicsWorld(dispatcher_.get(), broadphase_.get(),
+                                            constraint_solver_.get(),
+                                            collision_configuration_.get(),
+                                            soft_body_solver_.get())) {
+    const btVector3 gravity = toBullet(scene.solver.gravity);
+    world_->setGravity(gravity);
+    btSoftBodyWorldInfo& info = world_->getWorldInfo();
+    info.m_gravity = gravity;
+    info.air_density = 0;  // no aerodynamics: pbd_cloth has none
+    info.m_dispatcher = dispatcher_.get();
+    info.m_broadphase = broadphase_.get();
+    info.m_sparsesdf.Initialize();
+
+    // Cloth particles only, in pbd_cloth's order, so node i is particle i.
+    const int n = particles.cloth_count;
+    std::vector<btVector3> x(n);
+    std::vector<btScalar> m(n);
+    for (int i = 0; i < n; ++i) {
+      x[i] = toBullet(particles.position[i]);
+      m[i] = particles.isKinematic(i) ? 0 : static_cast<btScalar>(particles.mass[i]);  // pin
+    }
+    body_ = new btSoftBody(&info, n, x.data(), m.data());
+    btSoftBody::Material* material = body_->m_materials[0];
+    material->m_kLST = static_cast<btScalar>(knobs.link_stiffness);
+    for (const pbd_cloth::DistanceConstraint& con : topology.stretch) {
+      body_->appendLink(con.i, con.j, material);
+    }
+    const auto& t = topology.triangles;
+    for (std::size_t k = 0; k + 2 < t.size(); k += 3) {
+      body_->appendFace(static_cast<int>(t[k]), static_cast<int>(t[k + 1]),
+                        static_cast<int>(t[k + 2]), material);
+    }
+    if (knobs.bending) {
+      btSoftBody::Material* bend = body_->appendMaterial();
+      bend->m_kLST = static_cast<btScalar>(knobs.bend_stiffness);
+      body_->generateBendingConstraints(2, bend);
+    }
+    const int substeps = knobs.substeps > 0 ? knobs.substeps : scene.solver.substeps;
+    const double h = 1.0 / (scene.step_rate * substeps);
+    btSoftBody::Config& cfg = body_->m_cfg;
+    cfg.piterations = knobs.piterations > 0 ? knobs.piterations : scene.solver.iterations;
+    cfg.viterations = knobs.viterations;
+    cfg.diterations = knobs.diterations;
+    // Bullet scales velocities by (1 - kDP) once per internal step; pbd_cloth by (1 - damping h).
+    cfg.kDP = static_cast<btScalar>(knobs.damping >= 0.0
+                                        ? knobs.damping
+                                        : std::min(0.99, scene.solver.damping * h));
+    cfg.kDF = static_cast<btScalar>(scene.cloth.friction.kinetic_coefficient);
+    body_->getCollisionShape()->setMargin(static_cast<btScalar>(scene.cloth.thickness));
+    world_->addSoftBody(body_);
+    addObstacles(scene);
+  }
+
+  ~BulletCloth() {
+    for (int k = world_->getNumCollisionObjects() - 1; k >= 0; --k) {
+      btCollisionObject* object = world_->getCollisionObjectArray()[k];
+      if (btSoftBody* soft = btSoftBody::upcast(object)) {
+        world_->removeSoftBody(soft);
+      } else if (btRigidBody* rigid = btRigidBody::upcast(object)) {
+        world_->removeRigidBody(rigid);
+      }
+      delete object;
+    }
+  }
+
+  // One internal Bullet step of h s. stepSimulation(h, 0) takes exactly one internal step; N of
+  // them are the same as stepSimulation(dt, N, dt / N) without its single-precision time
+  // accumulator, which can run N - 1 or N + 1 internal steps in a frame.
+  void internalStep(btScalar h) { world_->stepSimulation(h, 0); }
+
+  // Copies node positions and velocities into the cloth particles of `particles`.
+  void read(pbd_cloth::Particles& particles) const {
+    const btSoftBody::tNodeArray& nodes = body_->m_nodes;
+    for (int i = 0; i < nodes.size(); ++i) {
+      const btVector3& x = nodes[i].m_x;
+      const btVector3& v = nodes[i].m_v;
+      particles.position[i] = pbd_cloth::Vec3(x.x(), x.y(), x.z());
+      particles.velocity[i] = pbd_cloth::Vec3(v.x(), v.y(), v.z());
+    }
+  }
+
+  int linkCount() const { return body_->m_links.size(); }
+
+ private:
+  void addObstacles(const pbd_cloth::SceneConfig& scene) {
+    for (const pbd_cloth::ObstacleConfig& obstacle : scene.obstacles) {
+      btCollisionShape* shape = nullptr;
+      btTransform pose = toBullet(obstacle.pose);
+      switch (obstacle.shape) {
+        case pbd_cloth::ShapeType::kSphere:
+          shape = new btSphereShape(static_cast<btScalar>(obstacle.radius));
+          break;
+        case pbd_cloth::ShapeType::kBox:
+          shape = new btBoxShape(toBullet(0.5 * obstacle.size));
+          break;
+        case pbd_cloth::ShapeType::kCapsule:
+          shape = new btCapsuleShapeZ(static_cast<btScalar>(obstacle.radius),
+                                      static_cast<btScalar>(obstacle.length));
+          break;
+        case pbd_cloth::ShapeType::kPlane: {
+          const Eigen::Vector3d normal = obstacle.normal.normalized();
+          shape = new btStaticPlaneShape(toBullet(normal),
+                                         static_cast<btScalar>(obstacle.offset /
+                                                               obstacle.normal.norm()));
+          pose.setIdentity();
+          break;
+        }
+      }
+      shapes_.emplace_back(shape);
+      btRigidBody::btRigidBodyConstructionInfo info(0, nullptr, shape);
+      info.m_startWorldTransform = pose;
+      info.m_friction = static_cast<btScalar>(scene.cloth.friction.kinetic_coefficient);
+      world_->addRigidBody(new btRigidBody(info));
+    }
+  }
+
+  std::unique_ptr<btSoftBodyRigidBodyCollisionConfiguration> collision_configuration_;
+  std::unique_ptr<btCollisionDispatcher> dispatcher_;
+  std::unique_ptr<btBroadphaseInterface> broadphase_;
+  std::unique_ptr<btSequentialImpulseConstraintSolver> constraint_solver_;
+  std::unique_ptr<btSoftBodySolver> soft_body_solver_;
+  std::unique_ptr<btSoftRigidDynamicsWorld> world_;
+  std::vector<std::unique_ptr<btCollisionShape>> shapes_;
+  btSoftBody* body_ = nullptr;  // owned by the world's object list, deleted in the destructor
+};
+
+// The metrics of Simulation::computeMetrics, on particles filled from Bullet's nodes.
+pbd_cloth::Metrics computeMetrics(const pbd_cloth::SceneConfig& scene,
+                                  const pbd_cloth::Particles& particles,
+                                  const pbd_cloth::ClothTopology& topology,
+                                  const pbd_cloth::Collisions& collisions) {
+  pbd_cloth::Metrics metrics;
+  pbd_cloth::computeStrain(particles, topology, metrics.max_strain, metrics.mean_strain);
+  metrics.max_penetration = collisions.maxPenetration(particles, topology);
+  metrics.finite = pbd_cloth::allFinite(particles);
+  // A diverged cloth (links ten times their length) puts every triangle in one grid cell of the
+  // intersection count, which then takes minutes and means nothing: -1 = not counted.
+  metrics.self_intersections =
+      metrics.finite && metrics.max_strain < kDivergedStrain
+          ? pbd_cloth::countSelfIntersections(particles, topology)
+          : -1;
+  const Eigen::Vector3d& g = scene.solver.gravity;
+  for (int i = 0; i < particles.size(); ++i) {
+    if (particles.isKinematic(i)) continue;
+    metrics.kinetic_energy += 0.5 * particles.mass[i] * particles.velocity[i].squaredNorm();
+    metrics.potential_energy -= particles.mass[i] * g.dot(particles.position[i]);
+  }
+  metrics.energy = metrics.kinetic_energy + metrics.potential_energy;
+  return metrics;
+}
+
+void writeCsvRow(std::ofstream& csv, double t, const pbd_cloth::Metrics& m) {
+  if (!csv.is_open()) return;
+  csv << t << ',' << m.max_strain << ',' << m.mean_strain << ',' << m.energy << ','
+      << m.max_penetration << '\n';
+}
+
+void warnAboutUnsupported(const pbd_cloth::SceneConfig& scene) {
+  if (scene.granular.count > 0) {
+    std::cerr << "bullet_cloth_bench: warning: granular particles are not simulated\n";
+  }
+  if (!scene.grippers.empty()) {
+    std::cerr << "bullet_cloth_bench: warning: grippers are not simulated\n";
+  }
+  if (scene.bounds.enabled) {
+    std::cerr << "bullet_cloth_bench: warning: the bounds box is not simulated\n";
+  }
+  if (scene.cloth.self_collision) {
+    std::cerr << "bullet_cloth_bench: warning: cloth self-collision is off in Bullet\n";
+  }
+}
+
+int run(const Options& options) {
+  YAML::Node root = pbd_cloth::loadSceneYaml(options.config);
+  for (const std::string& assignment : options.overrides) {
+    pbd_cloth::applyOverride(root, assignment);
+  }
+  pbd_cloth::SceneConfig scene = pbd_cloth::sceneFromYaml(root);
+  scene.granular.count = 0;  // the cloth only: Bullet's node i is pbd_cloth's particle i
+  if (!options.quiet) warnAboutUnsupported(scene);
+
+  std::ofstream csv = openOutput("--csv", options.csv);
+  std::ofstream positions = openOutput("--positions", options.positions);
+  std::ofstream mesh = openOutput("--mesh", options.mesh);
+  if (csv.is_open()) csv << "t,max_strain,mean_strain,energy,max_penetration\n";
+
+  pbd_cloth::Particles particles;
+  pbd_cloth::ClothTopology topology;
+  pbd_cloth::buildScene(scene, particles, topology);
+  pbd_cloth::Collisions collisions;  // only for maxPenetration against the same obstacles
+  collisions.configure(scene);
+  collisions.prepare(particles, topology);
+  BulletCloth cloth(scene, particles, topology, options.bullet);
+
+  const int substeps = options.bullet.substeps > 0 ? options.bullet.substeps
+                                                   : scene.solver.substeps;
+  const int piterations = options.bullet.piterations > 0 ? options.bullet.piterations
+                                                         : scene.solver.iterations;
+  const double dt = 1.0 / scene.step_rate;
+  const btScalar h = static_cast<btScalar>(dt / substeps);
+  const double step_count = options.duration * scene.step_rate;
+  if (step_count > std::numeric_limits<int>::max()) {
+    throw UsageError("--duration: " + std::to_string(step_count) + " steps are too many");
+  }
+  const long long steps = std::llround(step_count);
+  const int particle_count = particles.size();
+  const int sample_every =
+      options.sample_every > 0 ? options.sample_every : (particle_count <= kLargeScene ? 1 : 10);
+  if (!options.quiet) {
+    std::cerr << "bullet_cloth_bench: " << options.config << ": " << particle_count << " nodes, "
+              << cloth.linkCount() << " links, " << steps << " steps of " << dt << " s, "
+              << substeps << " internal steps x " << piterations << " position passes\n";
+  }
+
+  pbd_cloth::Metrics last = computeMetrics(scene, particles, topology, collisions);
+  double max_strain = last.max_strain;
+  double max_penetration = last.max_penetration;
+  int max_self_intersections = last.self_intersections;
+  writeCsvRow(csv, 0.0, last);
+
+  using Clock = std::chrono::steady_clock;
+  double step_seconds = 0.0;
+  long long done = 0;
+  while (done < steps) {
+    const Clock::time_point begin = Clock::now();
+    for (int s = 0; s < substeps; ++s) cloth.internalStep(h);
+    step_seconds += std::chrono::duration<double>(Clock::now() - begin).count();
+    ++done;
+    if (done % sample_every != 0 && done != steps) continue;
+    cloth.read(particles);
+    last = computeMetrics(scene, particles, topology, collisions);
+    max_strain = std::max(max_strain, last.max_strain);
+    max_penetration = std::max(max_penetration, last.max_penetration);
+    max_self_intersections = std::max(max_self_intersections, last.self_intersections);
+    writeCsvRow(csv, done * dt, last);
+    if (!last.finite) break;
+  }
+  cloth.read(particles);
+
+  if (positions.is_open()) {
+    for (int i = 0; i < particles.size(); ++i) {
+      const pbd_cloth::Vec3& x = particles.position[i];
+      positions << i << ',' << x.x() << ',' << x.y() << ',' << x.z() << '\n';
+    }
+  }
+  if (mesh.is_open()) {
+    mesh << "# bullet_cloth_bench " << topology.rows << " x " << topology.cols << " cloth at t = "
+         << done * dt << " s\n";
+    for (int i = 0; i < particles.cloth_count; ++i) {
+      const pbd_cloth::Vec3& x = particles.position[i];
+      mesh << "v " << x.x() << ' ' << x.y() << ' ' << x.z() << '\n';
+    }
+    const std::vector<unsigned>& t = topology.triangles;
+    for (std::size_t k = 0; k + 2 < t.size(); k += 3) {
+      mesh << "f " << t[k] + 1 << ' ' << t[k + 1] + 1 << ' ' << t[k + 2] + 1 << '\n';
+    }
+  }
+  finishOutput(csv, options.csv);
+  finishOutput(positions, options.positions);
+  finishOutput(mesh, options.mesh);
+
+  const double per_step = done > 0 ? 1.0 / static_cast<double>(done) : 0.0;
+  const BulletKnobs& knobs = options.bullet;
+  std::printf(
+      "wall_ms_per_step=%.6g max_strain=%.9g mean_strain=%.9g max_penetration=%.9g "
+      "self_intersections=%d energy=%.9g finite=%d steps=%lld sim_time=%.9g "
+      "iterations_per_step=%d method=bullet substeps=%d iterations=%d particles=%d "
+      "max_self_intersections=%d sample_every=%d bullet_links=%d bullet_viterations=%d "
+      "bullet_diterations=%d bullet_kLST=%g bullet_bending=%d\n",
+      1e3 * step_seconds * per_step, max_strain, last.mean_strain, max_penetration,
+      last.self_intersections, last.energy, last.finite ? 1 : 0, done, done * dt,
+      substeps * piterations, substeps, piterations, particle_count, max_self_intersections,
+      sample_every, cloth.linkCount(), knobs.viterations, knobs.diterations, knobs.link_stiffness,
+      knobs.bending ? 1 : 0);
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(parseArguments(argc, argv));
+  } catch (const UsageError& e) {
+    std::cerr << "bullet_cloth_bench: " << e.what()
+              << "\n(bullet_cloth_bench --help lists the options)\n";
+    return 2;
+  } catch (const pbd_cloth::ConfigError& e) {
+    std::cerr << "bullet_cloth_bench: " << e.what() << '\n';
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "bullet_cloth_bench: " << e.what() << '\n';
+    return 1;
+  }
+}

@@ -1,0 +1,276 @@
+// cloth_bench: runs a scene YAML offline (no ROS master) with the fixed step 1/step_rate and prints
+// one line of key=value metrics, the same Simulation the node drives. See kUsage.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "pbd_cloth/scene_yaml.h"
+#include "pbd_cloth/simulation.h"
+
+namespace {
+
+const char kUsage[] =
+    "Usage: cloth_bench --config <scene.yaml> --duration <s> [options]\n"
+    "Runs the scene without ROS for round(duration * step_rate) steps of 1/step_rate s and prints\n"
+    "one line of key=value metrics on stdout (wall_ms_per_step max_strain mean_strain\n"
+    "max_penetration self_intersections energy finite steps sim_time iterations_per_step\n"
+    "predict_ms collide_ms project_ms update_ms method substeps iterations ...).\n"
+    "Only the step calls are timed. max_strain, max_penetration and max_self_intersections are\n"
+    "maxima over the run, sampled every step when the scene has <= 5000 particles and every 10th\n"
+    "step otherwise (metrics are expensive on big scenes), and always at the last step; the other\n"
+    "metrics are those of the final state. The run stops early at the first sample with a\n"
+    "non-finite position or velocity (finite=0, steps = the steps actually run). Exit status 0\n"
+    "after a run (also with finite=0), 2 for a bad argument or scene key, 1 for any other "
+    "failure.\n"
+    "\n"
+    "Options:\n"
+    "  --config <file>        scene YAML (the format of config/hanging.yaml)\n"
+    "  --duration <s>         simulated time, >= 0\n"
+    "  --set <key=value>      override a scene key before the run, e.g. solver.substeps=20,\n"
+    "                         cloth.pinned=[0,49], grippers.0.radius=0.03; repeatable\n"
+    "  --csv <file>           write t,max_strain,mean_strain,energy,max_penetration rows (with\n"
+    "                         a header) at t = 0 and at every metric sample: every step for\n"
+    "                         scenes of <= 5000 particles, else every 10th step\n"
+    "  --sample-every <n>     sample the metrics every n steps instead (n >= 1)\n"
+    "  --positions <file>     write the final positions as index,x,y,z lines (no header)\n"
+    "  --mesh <file.obj>      write the final cloth as a Wavefront OBJ (v and 1-based f lines)\n"
+    "  --quiet                no progress message on stderr; the result line is still printed\n"
+    "  --help                 this text\n";
+
+constexpr int kLargeScene = 5000;  // particles; above it the metrics are sampled every 10th step
+
+// A bad command line: exit status 2, like a bad scene key.
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+struct Options {
+  std::string config;
+  double duration = -1.0;
+  std::vector<std::string> overrides;
+  std::string csv;
+  std::string positions;
+  std::string mesh;
+  int sample_every = 0;  // 0: by scene size
+  bool quiet = false;
+};
+
+double parseNumber(const std::string& option, const std::string& text) {
+  std::size_t used = 0;
+  double value = std::numeric_limits<double>::quiet_NaN();
+  try {
+    value = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size()) {
+    throw UsageError(option + ": expected a number, got '" + text + "'");
+  }
+  return value;
+}
+
+Options parseArguments(int argc, char** argv) {
+  Options options;
+  std::vector<std::string> args(argv + 1, argv + argc);
+  for (std::size_t k = 0; k < args.size(); ++k) {
+    std::string option = args[k];
+    std::string value;
+    bool has_value = false;
+    // --option=value is accepted too; the first '=' splits, so --set=a.b=1 works.
+    const std::size_t equals = option.find('=');
+    if (option.rfind("--", 0) == 0 && equals != std::string::npos) {
+      value = option.substr(equals + 1);
+      option = option.substr(0, equals);
+      has_value = true;
+    }
+    auto next = [&]() -> std::string {
+      if (has_value) return value;
+      if (k + 1 >= args.size()) throw UsageError(option + " needs a value");
+      return args[++k];
+    };
+    if (option == "--help" || option == "-h") {
+      std::cout << kUsage;
+      std::exit(0);
+    } else if (option == "--quiet") {
+      options.quiet = true;
+    } else if (option == "--config") {
+      options.config = next();
+    } else if (option == "--duration") {
+      const std::string text = next();
+      options.duration = parseNumber(option, text);
+      if (!std::isfinite(options.duration) || options.duration < 0.0) {
+        throw UsageError("--duration: must be a finite time >= 0 (s), got " + text);
+      }
+    } else if (option == "--set") {
+      options.overrides.push_back(next());
+    } else if (option == "--csv") {
+      options.csv = next();
+    } else if (option == "--positions") {
+      options.positions = next();
+    } else if (option == "--mesh") {
+      options.mesh = next();
+    } else if (option == "--sample-every") {
+      const double n = parseNumber(option, next());
+      if (!(n >= 1.0 && n <= 1e9 && n == std::floor(n))) {
+        throw UsageError("--sample-every: must be an integer >= 1");
+      }
+      options.sample_every = static_cast<int>(n);
+    } else {
+      throw UsageError("unknown argument '" + args[k] + "'");
+    }
+  }
+  if (options.config.empty()) throw UsageError("--config <scene.yaml> is required");
+  if (options.duration < 0.0) throw UsageError("--duration <s> is required");
+  return options;
+}
+
+// Opened before the run so that a bad path fails in a second, not after a long run.
+std::ofstream openOutput(const std::string& option, const std::string& path) {
+  std::ofstream out;
+  if (path.empty()) return out;
+  out.open(path, std::ios::trunc);
+  if (!out) throw UsageError(option + ": cannot write '" + path + "'");
+  // Exact doubles: files of two runs can be compared bit for bit (determinism checks).
+  out.precision(std::numeric_limits<double>::max_digits10);
+  return out;
+}
+
+void writePositions(std::ofstream& out, const pbd_cloth::Particles& particles) {
+  for (int i = 0; i < particles.size(); ++i) {
+    const pbd_cloth::Vec3& x = particles.position[i];
+    out << i << ',' << x.x() << ',' << x.y() << ',' << x.z() << '\n';
+  }
+}
+
+void writeMesh(std::ofstream& out, const pbd_cloth::Simulation& sim) {
+  const pbd_cloth::Particles& particles = sim.particles();
+  const pbd_cloth::ClothTopology& topology = sim.topology();
+  out << "# pbd_cloth " << topology.rows << " x " << topology.cols << " cloth at t = " << sim.time()
+      << " s\n";
+  for (int i = 0; i < particles.cloth_count; ++i) {
+    const pbd_cloth::Vec3& x = particles.position[i];
+    out << "v " << x.x() << ' ' << x.y() << ' ' << x.z() << '\n';
+  }
+  const std::vector<unsigned>& t = topology.triangles;
+  for (std::size_t k = 0; k + 2 < t.size(); k += 3) {
+    out << "f " << t[k] + 1 << ' ' << t[k + 1] + 1 << ' ' << t[k + 2] + 1 << '\n';
+  }
+}
+
+void writeCsvRow(std::ofstream& csv, double t, const pbd_cloth::Metrics& m) {
+  if (!csv.is_open()) return;
+  csv << t << ',' << m.max_strain << ',' << m.mean_strain << ',' << m.energy << ','
+      << m.max_penetration << '\n';
+}
+
+void finishOutput(std::ofstream& out, const std::string& path) {
+  if (!out.is_open()) return;
+  out.close();
+  if (!out) throw std::runtime_error("writing '" + path + "' failed");
+}
+
+int run(const Options& options) {
+  YAML::Node root = pbd_cloth::loadSceneYaml(options.config);
+  for (const std::string& assignment : options.overrides) {
+    pbd_cloth::applyOverride(root, assignment);
+  }
+  const pbd_cloth::SceneConfig scene = pbd_cloth::sceneFromYaml(root);
+
+  std::ofstream csv = openOutput("--csv", options.csv);
+  std::ofstream positions = openOutput("--positions", options.positions);
+  std::ofstream mesh = openOutput("--mesh", options.mesh);
+  if (csv.is_open()) csv << "t,max_strain,mean_strain,energy,max_penetration\n";
+
+  pbd_cloth::Simulation sim(scene);
+  const double step_count = options.duration * scene.step_rate;
+  if (step_count > std::numeric_limits<int>::max()) {
+    throw UsageError("--duration: " + std::to_string(step_count) + " steps are too many");
+  }
+  const long long steps = std::llround(step_count);
+  const int particle_count = sim.particles().size();
+  const int sample_every =
+      options.sample_every > 0 ? options.sample_every : (particle_count <= kLargeScene ? 1 : 10);
+  if (!options.quiet) {
+    std::cerr << "cloth_bench: " << options.config << ": " << particle_count << " particles, "
+              << sim.topology().triangleCount() << " triangles, " << steps << " steps of "
+              << 1.0 / scene.step_rate << " s, metrics every " << sample_every << " step(s)\n";
+  }
+
+  pbd_cloth::Metrics last = sim.computeMetrics();
+  double max_strain = last.max_strain;
+  double max_penetration = last.max_penetration;
+  int max_self_intersections = last.self_intersections;
+  writeCsvRow(csv, sim.time(), last);
+
+  double step_seconds = 0.0;
+  double predict = 0.0, collide = 0.0, project = 0.0, update = 0.0;
+  long long iterations = 0;
+  long long done = 0;
+  using Clock = std::chrono::steady_clock;
+  while (done < steps) {
+    const Clock::time_point begin = Clock::now();
+    sim.step();
+    step_seconds += std::chrono::duration<double>(Clock::now() - begin).count();
+    ++done;
+    const pbd_cloth::StepStats& stats = sim.stats();
+    predict += stats.predict_time;
+    collide += stats.collide_time;
+    project += stats.project_time;
+    update += stats.update_time;
+    iterations += stats.iterations;
+    if (done % sample_every != 0 && done != steps) continue;
+    last = sim.computeMetrics();
+    max_strain = std::max(max_strain, last.max_strain);
+    max_penetration = std::max(max_penetration, last.max_penetration);
+    max_self_intersections = std::max(max_self_intersections, last.self_intersections);
+    writeCsvRow(csv, sim.time(), last);
+    // A diverged state stays diverged; stepping NaNs further only costs time.
+    if (!last.finite) break;
+  }
+
+  if (positions.is_open()) writePositions(positions, sim.particles());
+  if (mesh.is_open()) writeMesh(mesh, sim);
+  finishOutput(csv, options.csv);
+  finishOutput(positions, options.positions);
+  finishOutput(mesh, options.mesh);
+
+  const double per_step = done > 0 ? 1.0 / static_cast<double>(done) : 0.0;
+  std::printf(
+      "wall_ms_per_step=%.6g max_strain=%.9g mean_strain=%.9g max_penetration=%.9g "
+      "self_intersections=%d energy=%.9g finite=%d steps=%lld sim_time=%.9g "
+      "iterations_per_step=%.6g predict_ms=%.6g collide_ms=%.6g project_ms=%.6g update_ms=%.6g "
+      "method=%s substeps=%d iterations=%d particles=%d max_self_intersections=%d "
+      "sample_every=%d\n",
+      1e3 * step_seconds * per_step, max_strain, last.mean_strain, max_penetration,
+      last.self_intersections, last.energy, last.finite ? 1 : 0, done, sim.time(),
+      static_cast<double>(iterations) * per_step, 1e3 * predict * per_step,
+      1e3 * collide * per_step, 1e3 * project * per_step, 1e3 * update * per_step,
+      pbd_cloth::toString(scene.solver.method), scene.solver.substeps, scene.solver.iterations,
+      particle_count, max_self_intersections, sample_every);
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(parseArguments(argc, argv));
+  } catch (const UsageError& e) {
+    std::cerr << "cloth_bench: " << e.what() << "\n(cloth_bench --help lists the options)\n";
+    return 2;
+  } catch (const pbd_cloth::ConfigError& e) {
+    std::cerr << "cloth_bench: " << e.what() << '\n';
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "cloth_bench: " << e.what() << '\n';
+    return 1;
+  }
+}

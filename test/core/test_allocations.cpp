@@ -1,0 +1,111 @@
+// The step allocates nothing once warm (issue 3: hot loops over flat arrays, free of allocation).
+// Global operator new/delete are replaced for the whole test_core binary; they only count while
+// `g_counting` is set, around sim.step() below, and otherwise behave like the default ones.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstdio>
+#include <cstdlib>
+#include <new>
+#include <vector>
+
+#include "pbd_cloth/simulation.h"
+#include "test_scenes.h"
+
+namespace {
+std::atomic<bool> g_counting{false};
+std::atomic<long> g_allocations{0};
+
+void* allocate(std::size_t size) {
+  if (g_counting.load(std::memory_order_relaxed)) {
+    g_allocations.fetch_add(1, std::memory_order_relaxed);
+  }
+  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
+  throw std::bad_alloc();
+}
+}  // namespace
+
+void* operator new(std::size_t size) { return allocate(size); }
+void* operator new[](std::size_t size) { return allocate(size); }
+void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
+  if (g_counting.load(std::memory_order_relaxed)) {
+    g_allocations.fetch_add(1, std::memory_order_relaxed);
+  }
+  return std::malloc(size == 0 ? 1 : size);
+}
+void* operator new[](std::size_t size, const std::nothrow_t& tag) noexcept {
+  return operator new(size, tag);
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+void operator delete(void* p, const std::nothrow_t&) noexcept { std::free(p); }
+void operator delete[](void* p, const std::nothrow_t&) noexcept { std::free(p); }
+
+namespace pbd_cloth {
+namespace {
+
+// Allocations during `steps` steps after 3 warm-up steps.
+long allocationsPerRun(const SceneConfig& scene, int steps) {
+  Simulation sim(scene);
+  for (int k = 0; k < 3; ++k) sim.step();
+  g_allocations = 0;
+  g_counting = true;
+  for (int k = 0; k < steps; ++k) sim.step();
+  g_counting = false;
+  return g_allocations.load();
+}
+
+// The counter itself works (otherwise a 0 below would prove nothing).
+TEST(Allocations, CounterSeesAllocations) {
+  static std::vector<double>* volatile sink = nullptr;  // volatile: the pair cannot be elided
+  g_allocations = 0;
+  g_counting = true;
+  sink = new std::vector<double>(100);
+  g_counting = false;
+  delete sink;
+  EXPECT_GE(g_allocations.load(), 2);  // the vector object and its buffer
+}
+
+// A 20 x 20 cloth pinned at two corners, with bending and tethers, every method and ordering.
+TEST(Allocations, SolverStepAllocatesNothingAfterWarmUp) {
+  for (Method method : {Method::kVerlet, Method::kPbd, Method::kXpbd, Method::kMassSpring}) {
+    for (Ordering ordering : {Ordering::kGaussSeidel, Ordering::kJacobi}) {
+      SceneConfig scene = test::clothScene(20, 20, 0.03, method);
+      scene.cloth.pinned = {0, 19};
+      scene.cloth.bend_compliance = 1e-3;
+      scene.cloth.tethers = true;
+      scene.solver.substeps = 4;
+      scene.solver.iterations = 2;
+      scene.solver.ordering = ordering;
+      const long count = allocationsPerRun(scene, 10);
+      EXPECT_EQ(count, 0) << toString(method) << " " << toString(ordering);
+    }
+  }
+}
+
+// The whole step as the node runs it: self-collision, an obstacle and a bounds box too.
+TEST(Allocations, StepWithCollisionsAllocatesNothingAfterWarmUp) {
+  for (Method method : {Method::kXpbd, Method::kVerlet}) {
+    SceneConfig scene = test::clothScene(20, 20, 0.03, method);
+    scene.cloth.origin = Eigen::Vector3d(-0.3, 0.3, 0.2);
+    scene.cloth.bend_compliance = 1e-3;
+    scene.cloth.self_collision = true;
+    scene.solver.substeps = 4;
+    ObstacleConfig ball;
+    ball.name = "ball";
+    ball.shape = ShapeType::kSphere;
+    ball.radius = 0.15;
+    scene.obstacles = {ball};
+    scene.bounds.enabled = true;
+    scene.bounds.min = Eigen::Vector3d(-1.0, -1.0, -0.2);
+    scene.bounds.max = Eigen::Vector3d(1.0, 1.0, 1.0);
+    // 20 steps after warm-up: the cloth reaches the ball and drapes over it.
+    const long count = allocationsPerRun(scene, 20);
+    EXPECT_EQ(count, 0) << toString(method);
+  }
+}
+
+}  // namespace
+}  // namespace pbd_cloth
