@@ -25,10 +25,10 @@
 //   phase for the rest of the step if one did not, so no contact is missed. The vertex-triangle
 //   constraint keeps each vertex on the side of the triangle it was on at the step start, so a
 //   vertex pushed through a cloth layer is pulled back, never out of the far side.
-// - Initial overlaps: an overlap already present at a substep start (deeper than a slop) is only
-//   kept from growing; it is removed by pre-stabilisation at the next step start, at most
-//   max_separation_speed * dt per step, on positions before the prediction, so the separation adds
-//   no velocity and overlapping particles never pop apart.
+// - Initial overlaps: at each step start, pre-stabilisation separates overlapping contacts by at
+//   most max_separation_speed * dt, on positions before the prediction, so the separation adds no
+//   velocity (Macklin et al. 2014, sec. 4.4). What remains (deeper than a slop) is only kept from
+//   growing during the step, so particles that start overlapping never pop apart.
 #pragma once
 
 #include <vector>
@@ -84,7 +84,7 @@ class Collisions {
   void computeSweptBoxes(const Particles& particles, double time_left);
   void findCandidates(const Particles& particles, const ClothTopology& topology);
   bool leftSweptBoxes(const Particles& particles) const;
-  void preStabilizeObstacles(Particles& particles, double max_shift) const;
+  void preStabilizeObstacles(Particles& particles, double max_shift);
   double projectObstacles(Particles& particles);
   double projectBounds(Particles& particles) const;
   bool particleContactsActive(const Particles& particles) const;
@@ -105,6 +105,7 @@ class Collisions {
   std::vector<Frame> frame_begin_;
   std::vector<Frame> frame_end_;
   std::vector<ContactState> obstacle_contacts_;  // [particle * obstacles + obstacle]
+  std::vector<double> obstacle_allowance_;       // same layout: allowanceFor, this step
 
   // Step and substep.
   double dt_ = 0.0;

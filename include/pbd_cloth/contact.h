@@ -15,23 +15,26 @@ namespace pbd_cloth {
 // the kinetic limit once per pass.
 struct ContactState {
   int substep = -1;
-  // Penetration tolerated in this substep: the overlap the contact already had at the substep start
-  // when deeper than the slop. Such an overlap is removed by pre-stabilisation at the start of the
-  // next step (no velocity gained, Macklin et al. 2014 sec. 4.4), not by the projection, whose
-  // correction would become velocity ("explosive popping").
-  double allowance = 0.0;
-  double depth = 0.0;                 // normal correction resolved this substep: the seed's d
-  Vec3 normal = Vec3::UnitZ();        // contact normal of the last correction
-  Vec3 friction = Vec3::Zero();       // relative friction correction applied this substep
+  double depth = 0.0;            // normal correction resolved this substep: the seed's d
+  Vec3 normal = Vec3::UnitZ();   // contact normal of the last correction
+  Vec3 friction = Vec3::Zero();  // relative friction correction applied this substep
 
   bool current(int stamp) const { return substep == stamp; }
-  void begin(int stamp, double tolerated) {
+  void begin(int stamp) {
     substep = stamp;
-    allowance = tolerated;
     depth = 0.0;
     friction.setZero();
   }
 };
+
+// Penetration a contact may keep during a step: the overlap left at the step start after
+// pre-stabilisation, when deeper than the slop (a fraction of the contact distance). Such an
+// overlap is only kept from growing and is removed by pre-stabilisation at the next step start,
+// without velocity (Macklin et al. 2014, sec. 4.4), instead of by the projection, whose correction
+// would become velocity ("explosive popping"). Zero for every contact that is not initially deep.
+inline double allowanceFor(double overlap, double contact_distance, double slop) {
+  return overlap > slop * contact_distance ? overlap : 0.0;
+}
 
 // Position-level Coulomb friction (collision seed, eq. friction_correction; Bender, Mueller, Macklin
 // 2017, eqs. 27-28). `relative` is the relative displacement of the two sides over the substep,

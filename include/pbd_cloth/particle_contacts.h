@@ -14,6 +14,7 @@ namespace pbd_cloth {
 struct ParticlePair {
   int i = 0;  // always a granular particle
   int j = 0;  // granular (j > i) or cloth
+  double allowance = 0.0;  // overlap tolerated this step (allowanceFor)
   ContactState state;
 };
 
@@ -30,11 +31,12 @@ class ParticleContacts {
   // by at most max_shift each, on the positions before the step's first prediction, so the
   // separation becomes no velocity.
   void preStabilize(Particles& particles, double max_shift) const;
+  // After pre-stabilisation: the overlap each pair may keep this step (allowanceFor, `slop` a
+  // fraction of r_i + r_j), measured in `positions` (those of the step start).
+  void measureAllowances(const Particles& particles, const Vec3Array& positions, double slop);
 
   // One projection pass over the candidate pairs, then friction; returns the largest correction.
-  // `slop` (fraction of r_i + r_j) is the overlap at the substep start above which a pair only
-  // must not get deeper (see ContactState::allowance).
-  double project(Particles& particles, int substep, double slop, const FrictionConfig& friction);
+  double project(Particles& particles, int substep, const FrictionConfig& friction);
 
   // Deepest overlap (r_i + r_j - |p_i - p_j|) over the candidate pairs (m).
   double maxPenetration(const Particles& particles) const;

@@ -15,7 +15,8 @@ namespace pbd_cloth {
 struct VertexTrianglePair {
   int vertex = 0;
   int triangle[3] = {0, 0, 0};
-  double side = 1.0;  // s: +1 in front of the triangle (its normal side) at the step start, -1 behind
+  double side = 1.0;  // s: +1 in front of the triangle (its normal side), -1 behind
+  double allowance = 0.0;  // approach closer than h tolerated this step (allowanceFor)
   ContactState state;
 };
 
@@ -34,9 +35,13 @@ class SelfCollision {
   // Pre-stabilisation: pushes vertices closer than h to a triangle apart by at most max_shift, on
   // the positions before the step's first prediction (no velocity gained).
   void preStabilize(Particles& particles, double thickness, double max_shift) const;
+  // After pre-stabilisation: how much closer than h each vertex over its triangle may stay this
+  // step (allowanceFor, `slop` a fraction of h; never on the wrong side), measured in `positions`
+  // (those of the step start).
+  void measureAllowances(const Vec3Array& positions, double thickness, double slop);
 
   // One projection pass, then friction; returns the largest correction.
-  double project(Particles& particles, double thickness, int substep, double slop,
+  double project(Particles& particles, double thickness, int substep,
                  const FrictionConfig& friction);
 
   // Deepest violation h - s (q - p1) . n over pairs whose vertex projects inside its triangle (m).

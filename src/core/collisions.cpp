@@ -8,9 +8,8 @@ namespace pbd_cloth {
 
 namespace {
 
-// An overlap at the substep start deeper than this fraction of the contact distance counts as
-// pre-existing: kept from growing, removed by pre-stabilisation (ContactState::allowance).
-// Residual overlaps of converging contacts (a stack under load) stay far below it.
+// An overlap left after pre-stabilisation deeper than this fraction of the contact distance is
+// kept from growing rather than projected away during the step (allowanceFor in contact.h).
 constexpr double kOverlapSlop = 0.02;
 // Swept boxes grow by this fraction of the particle radius to absorb the difference between the
 // unconstrained prediction and the constrained motion.
@@ -49,6 +48,7 @@ bool Collisions::setObstacleTarget(int obstacle, const Pose& target) {
 void Collisions::prepare(const Particles& particles, const ClothTopology& topology) {
   const int n = particles.size();
   obstacle_contacts_.assign(static_cast<std::size_t>(n) * obstacles_.size(), ContactState());
+  obstacle_allowance_.assign(obstacle_contacts_.size(), 0.0);
   box_lo_.assign(n, Vec3::Zero());
   box_hi_.assign(n, Vec3::Zero());
   particle_contacts_.reserve(particles);
@@ -137,6 +137,12 @@ void Collisions::beginStep(Particles& particles, const ClothTopology& topology, 
   if (self_collision) self_collision_pairs_.preStabilize(particles, thickness_, max_shift);
   preStabilizeObstacles(particles, max_shift);
   particles.step_start = particles.position;
+  if (particle_contacts) {
+    particle_contacts_.measureAllowances(particles, particles.step_start, kOverlapSlop);
+  }
+  if (self_collision) {
+    self_collision_pairs_.measureAllowances(particles.step_start, thickness_, kOverlapSlop);
+  }
 }
 
 void Collisions::setSubstepFraction(double s_begin, double s_end) {
@@ -163,23 +169,28 @@ double Collisions::project(Particles& particles, const ClothTopology& topology) 
     if ((particle_contacts || self_collision) && leftSweptBoxes(particles)) {
       computeSweptBoxes(particles, (1.0 - substep_begin_) * dt_);
       findCandidates(particles, topology);
+      if (particle_contacts) {
+        particle_contacts_.measureAllowances(particles, particles.step_start, kOverlapSlop);
+      }
+      if (self_collision) {
+        self_collision_pairs_.measureAllowances(particles.step_start, thickness_, kOverlapSlop);
+      }
     }
   }
   double max_change = 0.0;
   if (particle_contacts) {
-    max_change = std::max(max_change,
-                          particle_contacts_.project(particles, substep_, kOverlapSlop, friction_));
+    max_change = std::max(max_change, particle_contacts_.project(particles, substep_, friction_));
   }
   if (self_collision) {
-    max_change = std::max(max_change, self_collision_pairs_.project(particles, thickness_, substep_,
-                                                                    kOverlapSlop, friction_));
+    max_change = std::max(max_change,
+                          self_collision_pairs_.project(particles, thickness_, substep_, friction_));
   }
   max_change = std::max(max_change, projectObstacles(particles));
   max_change = std::max(max_change, projectBounds(particles));
   return max_change;
 }
 
-void Collisions::preStabilizeObstacles(Particles& p, double max_shift) const {
+void Collisions::preStabilizeObstacles(Particles& p, double max_shift) {
   const std::size_t count = shapes_.size();
   for (int i = 0; i < p.size(); ++i) {
     if (p.inverse_mass[i] == 0.0) continue;
@@ -187,9 +198,14 @@ void Collisions::preStabilizeObstacles(Particles& p, double max_shift) const {
       Vec3 normal;
       const double clearance =
           signedDistance(shapes_[k], frame_end_[k].toLocal(p.position[i]), normal) - p.radius[i];
+      double left = 0.0;
       if (clearance < 0.0) {
-        p.position[i] += std::min(-clearance, max_shift) * (frame_end_[k].rotation * normal);
+        const double shift = std::min(-clearance, max_shift);
+        p.position[i] += shift * (frame_end_[k].rotation * normal);
+        left = -clearance - shift;
       }
+      obstacle_allowance_[static_cast<std::size_t>(i) * count + k] =
+          allowanceFor(left, p.radius[i], kOverlapSlop);
     }
   }
 }
@@ -217,16 +233,15 @@ double Collisions::projectObstacles(Particles& p) {
       // The distance is 1-Lipschitz: a segment whose end is farther from the surface than its
       // length never touched the shape.
       if (clearance >= (b - a).norm()) continue;
-      ContactState& state = obstacle_contacts_[static_cast<std::size_t>(i) * count + k];
-      if (!state.current(substep_)) {
-        const double start_clearance = signedDistance(shape, a) - r;
-        state.begin(substep_, start_clearance < -kOverlapSlop * r ? -start_clearance : 0.0);
-      }
+      const std::size_t slot = static_cast<std::size_t>(i) * count + k;
+      ContactState& state = obstacle_contacts_[slot];
+      if (!state.current(substep_)) state.begin(substep_);
+      const double allowance = obstacle_allowance_[slot];
       double c = clearance;
       Vec3 normal = normal_b;
       double t = 0.0;
-      if (state.allowance > 0.0) {
-        c = clearance + state.allowance;  // started inside: only not deeper
+      if (allowance > 0.0) {
+        c = clearance + allowance;  // started inside: only not deeper
       } else if (sweepSphere(shape, a, b, r, t)) {
         Vec3 normal_entry;
         const Vec3 entry = a + t * (b - a);

@@ -79,8 +79,15 @@ void ParticleContacts::preStabilize(Particles& p, double max_shift) const {
   }
 }
 
-double ParticleContacts::project(Particles& p, int substep, double slop,
-                                 const FrictionConfig& friction) {
+void ParticleContacts::measureAllowances(const Particles& p, const Vec3Array& x, double slop) {
+  for (ParticlePair& pair : pairs_) {
+    const double contact_distance = p.radius[pair.i] + p.radius[pair.j];
+    const double overlap = contact_distance - (x[pair.i] - x[pair.j]).norm();
+    pair.allowance = allowanceFor(overlap, contact_distance, slop);
+  }
+}
+
+double ParticleContacts::project(Particles& p, int substep, const FrictionConfig& friction) {
   double max_change = 0.0;
   for (ParticlePair& pair : pairs_) {
     const int i = pair.i, j = pair.j;
@@ -89,16 +96,12 @@ double ParticleContacts::project(Particles& p, int substep, double slop,
     if (w == 0.0) continue;
     const double contact_distance = p.radius[i] + p.radius[j];
     ContactState& state = pair.state;
-    if (!state.current(substep)) {
-      const double start_overlap =
-          contact_distance - (p.substep_start[i] - p.substep_start[j]).norm();
-      state.begin(substep, start_overlap > slop * contact_distance ? start_overlap : 0.0);
-    }
+    if (!state.current(substep)) state.begin(substep);
     const Vec3 delta = p.position[i] - p.position[j];
     const double distance = delta.norm();
     // Seed eq. particle_particle_constraint, solved like a stretch constraint: the correction
     // along the centre line is split by inverse mass, which conserves momentum.
-    const double c = distance - (contact_distance - state.allowance);
+    const double c = distance - (contact_distance - pair.allowance);
     if (c < 0.0) {
       const Vec3 n = separationDirection(p, i, j, delta, distance);
       p.position[i] -= (wi / w * c) * n;

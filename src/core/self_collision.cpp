@@ -138,7 +138,20 @@ void SelfCollision::preStabilize(Particles& p, double thickness, double max_shif
   }
 }
 
-double SelfCollision::project(Particles& p, double thickness, int substep, double slop,
+void SelfCollision::measureAllowances(const Vec3Array& x, double thickness, double slop) {
+  for (VertexTrianglePair& pair : pairs_) {
+    pair.allowance = 0.0;
+    TriangleProjection g;
+    if (projectOntoTriangle(x[pair.vertex], x[pair.triangle[0]], x[pair.triangle[1]],
+                            x[pair.triangle[2]], g) &&
+        g.inside()) {
+      pair.allowance =
+          allowanceFor(thickness - std::max(pair.side * g.distance, 0.0), thickness, slop);
+    }
+  }
+}
+
+double SelfCollision::project(Particles& p, double thickness, int substep,
                               const FrictionConfig& friction) {
   double max_change = 0.0;
   for (VertexTrianglePair& pair : pairs_) {
@@ -148,25 +161,16 @@ double SelfCollision::project(Particles& p, double thickness, int substep, doubl
     const double wt[3] = {p.inverse_mass[t[0]], p.inverse_mass[t[1]], p.inverse_mass[t[2]]};
     ContactState& state = pair.state;
     if (!state.current(substep)) {
-      double allowance = 0.0;
+      state.begin(substep);
+      // Beside the triangle the vertex may go round its edge to the other side (a hinge
+      // neighbour rotating about the shared edge, a layer sliding past a fold): the side only
+      // freezes while the vertex is over the triangle, where changing it means passing through.
       TriangleProjection start;
       if (projectOntoTriangle(p.substep_start[v], p.substep_start[t[0]], p.substep_start[t[1]],
-                              p.substep_start[t[2]], start)) {
-        if (!start.inside()) {
-          // Beside the triangle the vertex may go round its edge to the other side (a hinge
-          // neighbour rotating about the shared edge, a layer sliding past a fold): the side only
-          // freezes while the vertex is over the triangle, where changing it means passing through.
-          if (start.distance != 0.0) pair.side = start.distance > 0.0 ? 1.0 : -1.0;
-        } else {
-          // A vertex already closer than h at the substep start may stay that close (but never on
-          // the wrong side) until pre-stabilisation separates it without velocity.
-          const double clearance = pair.side * start.distance;
-          if (clearance < (1.0 - slop) * thickness) {
-            allowance = thickness - std::max(clearance, 0.0);
-          }
-        }
+                              p.substep_start[t[2]], start) &&
+          !start.inside() && start.distance != 0.0) {
+        pair.side = start.distance > 0.0 ? 1.0 : -1.0;
       }
-      state.begin(substep, allowance);
     }
     TriangleProjection g;
     if (!projectOntoTriangle(p.position[v], p.position[t[0]], p.position[t[1]], p.position[t[2]],
@@ -179,7 +183,7 @@ double SelfCollision::project(Particles& p, double thickness, int substep, doubl
     const double w = wv + g.weight[0] * g.weight[0] * wt[0] + g.weight[1] * g.weight[1] * wt[1] +
                      g.weight[2] * g.weight[2] * wt[2];
     if (w == 0.0) continue;
-    const double c = pair.side * g.distance - (thickness - state.allowance);
+    const double c = pair.side * g.distance - (thickness - pair.allowance);
     if (c < 0.0) {
       const Vec3 direction = pair.side * g.normal;
       const double lambda = -c / w;
