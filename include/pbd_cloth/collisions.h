@@ -1,15 +1,17 @@
 // Contact constraints of the collision seed, projected inside the solver loop as unilateral
 // constraints C >= 0 (never as a post-pass): the bounds box (seed 000, C1), obstacles (plane,
-// sphere, box, capsule; static or moving) with friction, particle-particle contact and
-// vertex-triangle self-collision with thickness.
+// sphere, box, capsule; static or moving) with friction, particle-particle contact, and cloth
+// self-collision with thickness (vertex-triangle per the seed, plus edge-edge; self_collision.h).
+// Position-level friction (seed eq. friction_correction) acts on all three kinds (contact.h).
 //
 // The step, as the solver drives it:
-//   beginStep         broad phase once per step (swept boxes, spatial hash, flat candidate arrays)
-//                     and pre-stabilisation of overlaps that exist before the step
+//   beginStep           broad phase once per step (swept boxes, spatial hash, flat candidate
+//                       arrays) and pre-stabilisation of overlaps that exist before the step
 //   setSubstepFraction  obstacles at their interpolated poses for the substep
-//   project           once per constraint pass: particle-particle, vertex-triangle, obstacles, bounds
-//                     (obstacles and bounds last, so a pass ends free of penetration into them)
-//   endStep           obstacles arrive at their targets
+//   project             once per constraint pass: particle-particle, self-collision, obstacles,
+//                       bounds (obstacles and bounds last: a pass ends free of penetration into
+//                       them)
+//   endStep             obstacles arrive at their targets
 //
 // No tunnelling, and how:
 // - Obstacles: continuous. Each pass sweeps the particle's sphere along its substep path in the
@@ -18,16 +20,19 @@
 //   is not the one it entered by (a thin plate crossed, a box corner cut), the particle is
 //   projected onto the tangent plane at the entry point, i.e. back to the side it came from;
 //   otherwise onto the nearest surface. A moving obstacle therefore sweeps particles along however
-//   fast it moves, and a particle of any speed never passes a plate of any thickness.
+//   fast it moves, and a particle of any speed never passes a plate of any thickness. (Contact is
+//   per particle: an obstacle thinner than the gap between two cloth particles can slip between
+//   them.)
 // - Particles and cloth: the broad phase bounds each particle's motion over the step by its swept
 //   box (step-start position to the unconstrained prediction x + v dt + g dt^2, grown by half its
-//   radius); every substep checks that the particles stayed in their boxes and repeats the broad
-//   phase for the rest of the step if one did not, so no contact is missed. The vertex-triangle
-//   constraint keeps each vertex on the side of the triangle it was on at the step start, so a
-//   vertex pushed through a cloth layer is pulled back, never out of the far side.
-// - Initial overlaps: at each step start, pre-stabilisation separates overlapping contacts by at
-//   most max_separation_speed * dt, on positions before the prediction, so the separation adds no
-//   velocity (Macklin et al. 2014, sec. 4.4). What remains (deeper than a slop) is only kept from
+//   radius). After each substep's prediction the particles are checked against their boxes; if one
+//   left its box the particle-particle and vertex-triangle candidates are searched again for the
+//   rest of the step (edge-edge candidates, a safety net behind vertex-triangle, stay those of
+//   the step start). Self-contacts keep each vertex (edge) on the side of the triangle (edge) it
+//   was on, so a vertex pushed through a cloth layer is pulled back, never out of the far side.
+// - Initial overlaps: at each step start, pre-stabilisation separates contacts overlapping by more
+//   than a slop by at most max_separation_speed * dt, on positions before the prediction, so the
+//   separation adds no velocity (Macklin et al. 2014, sec. 4.4). What remains is only kept from
 //   growing during the step, so particles that start overlapping never pop apart.
 #pragma once
 
@@ -45,13 +50,14 @@ namespace pbd_cloth {
 // Figures of the last step.
 struct CollisionStats {
   int particle_pairs = 0;         // particle-particle candidates
-  int vertex_triangle_pairs = 0;  // self-collision candidates
+  int vertex_triangle_pairs = 0;  // self-collision candidates (vertex-triangle and edge-edge)
   int broad_phase_runs = 0;       // 1, plus one per substep whose particles left their swept boxes
 };
 
 class Collisions {
  public:
-  // Reads bounds, friction, thickness, self_collision, gravity (for the motion bound) and obstacles.
+  // Reads bounds, friction, thickness, self_collision, gravity (for the motion bound) and
+  // obstacles.
   void configure(const SceneConfig& scene);
   void setFriction(const FrictionConfig& friction) { friction_ = friction; }
   // An obstacle moves from its current pose to `target` over the next step (a kinematic body).
@@ -82,7 +88,7 @@ class Collisions {
 
  private:
   void computeSweptBoxes(const Particles& particles, double time_left);
-  void findCandidates(const Particles& particles, const ClothTopology& topology);
+  void findCandidates(const Particles& particles, const ClothTopology& topology, bool step_start);
   bool leftSweptBoxes(const Particles& particles) const;
   void preStabilizeObstacles(Particles& particles, double max_shift);
   double projectObstacles(Particles& particles);
@@ -104,13 +110,16 @@ class Collisions {
   std::vector<Shape> shapes_;
   std::vector<Frame> frame_begin_;
   std::vector<Frame> frame_end_;
+  Vec3Array obstacle_lo_;  // world bounds of each obstacle over the substep (begin and end poses)
+  Vec3Array obstacle_hi_;
   std::vector<ContactState> obstacle_contacts_;  // [particle * obstacles + obstacle]
   std::vector<double> obstacle_allowance_;       // same layout: allowanceFor, this step
 
   // Step and substep.
   double dt_ = 0.0;
   double substep_begin_ = 0.0;
-  int substep_ = 0;          // stamp of the current substep (ContactState::substep)
+  int step_ = 0;              // stamp of the current step (ContactState::window)
+  int substep_ = 0;           // stamp of the current substep (ContactState::substep)
   int checked_substep_ = -1;  // substep whose particles were checked against their swept boxes
 
   // Broad phase of the step.

@@ -1,5 +1,6 @@
-// What every contact kind (particle-shape, particle-particle, vertex-triangle) keeps while a substep
-// runs, and the position-level friction of the collision seed that all three share.
+// What every contact kind (particle-shape, particle-particle, vertex-triangle) keeps while it acts,
+// the projection of its normal constraint, and the position-level friction of the collision seed
+// that all three share.
 #pragma once
 
 #include <algorithm>
@@ -9,23 +10,71 @@
 
 namespace pbd_cloth {
 
-// Per-contact state, valid for one substep (a state stamped with an older substep is empty).
-// Accumulating over the passes of a substep makes the friction law independent of the pass count:
-// one pass gives exactly the seed's formula, more passes give the same total instead of applying
-// the kinetic limit once per pass.
+// Per-contact state while the contact acts.
+//
+// Normal: the correction pushed in the current substep (projected Gauss-Seidel, see
+// contactIncrement).
+//
+// Friction: the seed measures the relative displacement over "the time step" and uses the
+// penetration d resolved in it (REFERENCE_CASES.md case 10: "the penetration resolved in the
+// step"). The window over which both are accumulated opens at the step start, or at the substep in
+// which the contact came into touch, and runs on through the substeps of the step while the contact
+// stays in touch (within a small gap, kTouchGap, at each substep start). For
+// one contact this is the seed's law substep by substep (the same accelerations, the same critical
+// angle, test_friction.cpp). But the slip that one Gauss-Seidel pass leaves uncorrected (a floor
+// undoing part of the reaction a particle resting on another one received) is caught up by the
+// next substeps instead of being forgotten at every substep start: measured per substep, that slip
+// makes a granular pile creep at a rate set by the substep count (test_granular.cpp). A contact
+// that begins within the step measures from where it was when it began, so motion from before it
+// touched is never cancelled.
 struct ContactState {
-  int substep = -1;
-  double depth = 0.0;            // normal correction resolved this substep: the seed's d
+  int substep = -1;              // substep of the last evaluation
+  int window = -1;               // step of the friction window
+  double depth = 0.0;            // normal correction pushed in this substep
+  double window_depth = 0.0;     // normal correction of the window's earlier substeps
   Vec3 normal = Vec3::UnitZ();   // contact normal of the last correction
-  Vec3 friction = Vec3::Zero();  // relative friction correction applied this substep
+  Vec3 friction = Vec3::Zero();  // relative friction correction accumulated over the window
+  Vec3 base = Vec3::Zero();      // relative position the window measures displacement from
 
-  bool current(int stamp) const { return substep == stamp; }
-  void begin(int stamp) {
-    substep = stamp;
+  // First evaluation in a substep: continues the friction window when the contact is still
+  // `in_touch` at this substep start, else opens a new one. Returns true for a new
+  // window: the caller then sets `base` from the positions at the substep start. Passing the
+  // substep stamp as the step gives a window of one substep.
+  bool beginSubstep(int substep_stamp, int step_stamp, bool in_touch) {
+    if (substep == substep_stamp) return false;
+    const bool continuing = window == step_stamp && in_touch;
+    if (continuing) {
+      window_depth += depth;
+    } else {
+      window = step_stamp;
+      window_depth = 0.0;
+      friction.setZero();
+    }
     depth = 0.0;
-    friction.setZero();
+    substep = substep_stamp;
+    return !continuing;
   }
+  // The seed's d: the normal correction resolved over the window.
+  double frictionDepth() const { return window_depth + depth; }
+  void forget() { substep = window = -1; }
 };
+
+// A contact within this fraction of its contact distance at a substep start counts as still in
+// touch (ContactState::beginSubstep).
+constexpr double kTouchGap = 0.05;
+
+// Projected Gauss-Seidel on a unilateral contact (C >= 0): the correction this pass for the current
+// value c of C, given what the contact has already pushed this substep (state.depth). A
+// penetrating contact is pushed out by -c; a separated one that pushed earlier in the substep
+// gives back up to what it pushed (the total stays >= 0: a contact never pulls). With one pass
+// this is the seed's projection; with more, the total converges to the contact's multiplier
+// instead of summing every back-and-forth of the relaxation, so the friction bound mu d does not
+// grow with the pass count. Updates the state and returns the increment.
+inline double contactIncrement(double c, ContactState& state) {
+  const double increment = std::max(-c, -state.depth);
+  state.depth += increment;
+  return increment;
+}
 
 // Penetration a contact may keep during a step: the overlap left at the step start after
 // pre-stabilisation, when deeper than the slop (a fraction of the contact distance). Such an
@@ -36,29 +85,33 @@ inline double allowanceFor(double overlap, double contact_distance, double slop)
   return overlap > slop * contact_distance ? overlap : 0.0;
 }
 
-// Position-level Coulomb friction (collision seed, eq. friction_correction; Bender, Mueller, Macklin
-// 2017, eqs. 27-28). `relative` is the relative displacement of the two sides over the substep,
-// Delta p_rel = (p*_i - p_i) - (p*_j - p_j); `depth` the penetration d resolved in the substep.
-// Returns the increment of relative correction to apply now (distribute it by inverse mass):
-// the total correction is -Delta p_t when |Delta p_t| <= mu_s d (static: the tangential motion is
-// cancelled) and -Delta p_t min(mu_k d / |Delta p_t|, 1) otherwise (kinetic), where Delta p_t is
-// the tangential displacement the contact would have had without friction in this substep.
+// Position-level Coulomb friction (collision seed, eq. friction_correction; Bender, Mueller,
+// Macklin 2017, eqs. 27-28). `relative` is the relative displacement of the two sides over the
+// friction window, Delta p_rel = (p*_i - p_i) - (p*_j - p_j); state.frictionDepth() the penetration
+// d resolved in it. Returns the increment of relative correction to apply now (the caller
+// distributes it by inverse mass).
+//
+// The seed's law for one pass: the correction is -Delta p_t (static) when |Delta p_t| <= mu_s d,
+// else -Delta p_t mu_k d / |Delta p_t| (kinetic), with Delta p_t the tangential part of
+// Delta p_rel. Over several passes and substeps the correction is accumulated (state.friction) and
+// the total kept inside the friction cone, as projected Gauss-Seidel does with contact impulses:
+// each pass asks for the accumulated correction plus whatever tangential motion is left, and the
+// total is scaled back to mu_k d when it exceeds mu_s d. One pass gives exactly the seed's
+// formula; more converge to the Coulomb answer even when another constraint (a floor under the
+// lower of two stacked particles) undoes part of the correction in between.
 inline Vec3 frictionCorrection(const Vec3& relative, ContactState& state,
                                const FrictionConfig& friction) {
   const Vec3& n = state.normal;
-  const Vec3 tangential = relative - relative.dot(n) * n;
+  const Vec3 tangential = relative - relative.dot(n) * n;  // Delta p_t left now
   const Vec3 applied = state.friction - state.friction.dot(n) * n;
-  const Vec3 free = tangential - applied;  // Delta p_t of the seed
-  const double length = free.norm();
-  Vec3 total;
-  if (length <= friction.static_coefficient * state.depth) {
-    total = -free;
-  } else {
-    total = -std::min(friction.kinetic_coefficient * state.depth / length, 1.0) * free;
+  Vec3 total = applied - tangential;
+  const double length = total.norm();
+  const double depth = state.frictionDepth();
+  if (length > friction.static_coefficient * depth) {
+    total *= friction.kinetic_coefficient * depth / length;  // kinetic: on the cone
   }
-  const Vec3 increment = total - applied;
   state.friction = total;
-  return increment;
+  return total - applied;
 }
 
 }  // namespace pbd_cloth

@@ -12,8 +12,8 @@
 namespace pbd_cloth {
 
 struct ParticlePair {
-  int i = 0;  // always a granular particle
-  int j = 0;  // granular (j > i) or cloth
+  int i = 0;               // always a granular particle
+  int j = 0;               // granular (j > i) or cloth
   double allowance = 0.0;  // overlap tolerated this step (allowanceFor)
   ContactState state;
 };
@@ -23,20 +23,23 @@ class ParticleContacts {
   void reserve(const Particles& particles);
 
   // Broad phase, once per step: every pair whose swept boxes [lo, hi] (the motion bound of the
-  // step), grown by the radii, overlap. Hashes the box corners with a cell no smaller than any box,
-  // so a query of the neighbouring cells finds them all.
+  // step), grown by the radii, overlap. All particles are hashed (cell: the mean box) and each
+  // granular particle queries its box.
   void findPairs(const Particles& particles, const Vec3Array& lo, const Vec3Array& hi);
 
-  // Pre-stabilisation (Macklin et al. 2014, sec. 4.4): one pass that pushes overlapping pairs apart
-  // by at most max_shift each, on the positions before the step's first prediction, so the
-  // separation becomes no velocity.
-  void preStabilize(Particles& particles, double max_shift) const;
+  // Pre-stabilisation (Macklin et al. 2014, sec. 4.4): one pass that pushes pairs overlapping by
+  // more than the slop (a fraction of r_i + r_j) apart by at most max_shift each, on the positions
+  // before the step's first prediction, so the separation becomes no velocity. Shallower overlaps
+  // (the residual of a loaded stack) are left to the projection, whose friction holds them: a
+  // frictionless push every step would make a pile creep.
+  void preStabilize(Particles& particles, double max_shift, double slop) const;
   // After pre-stabilisation: the overlap each pair may keep this step (allowanceFor, `slop` a
   // fraction of r_i + r_j), measured in `positions` (those of the step start).
   void measureAllowances(const Particles& particles, const Vec3Array& positions, double slop);
 
-  // One projection pass over the candidate pairs, then friction; returns the largest correction.
-  double project(Particles& particles, int substep, const FrictionConfig& friction);
+  // One projection pass over the candidate pairs, each followed by its friction (window of the
+  // step, see ContactState); returns the largest correction. `substep` and `step` are stamps.
+  double project(Particles& particles, int substep, int step, const FrictionConfig& friction);
 
   // Deepest overlap (r_i + r_j - |p_i - p_j|) over the candidate pairs (m).
   double maxPenetration(const Particles& particles) const;

@@ -1,9 +1,29 @@
-// Vertex-triangle self-collision of the collision seed (eq. vertex_triangle_constraint):
-// C(q, p1, p2, p3) = s (q - p1) . n - h >= 0 with the triangle's unit normal n, the cloth thickness
-// h, and the side s = +-1 the vertex was on at the start of the step, so a vertex pushed through a
-// triangle within a step is pulled back to the side it came from instead of out of the far side.
+// Cloth self-collision with thickness h.
+//
+// Vertex-triangle, the collision seed's constraint (eq. vertex_triangle_constraint):
+//   C(q, p1, p2, p3) = s (q - p1) . n - h >= 0,  n = p21 x p31 / |p21 x p31|,
+// applied while q projects inside the triangle (barycentric test), all four particles corrected
+// by inverse mass.
+//
+// Edge-edge, its companion (Bridson, Fedkiw, Anderson 2002, sec. 7): vertex-triangle alone cannot
+// see two edges crossing near the triangles' borders (a free edge of the cloth sliding past
+// another, the layers of a fold meeting at its rim), which is what countSelfIntersections counts.
+// For edges p1p2 and q1q2 whose closest points p(a), q(b) are interior to both,
+//   C = s (p1 - q1) . n - h >= 0,  n = p21 x q21 / |p21 x q21|
+// ((p(a) - q(b)) is parallel to n there, so (p1 - q1) . n is their signed distance).
+//
+// The side s: taken from the positions at the step start, then frozen while the vertex is over the
+// triangle (the edges' closest points are interior and the edges within a few thicknesses), where
+// changing sides means passing through; elsewhere it follows the vertex round the triangle's
+// border at every substep start. So a vertex or edge pushed through the other layer within a step
+// is pulled back to the side it came from.
+//
+// Both are written as one four-point contact: C = s n . sum_k c_k x_k - h with coefficients
+// (1, -b1, -b2, -b3) (b the barycentric weights) or (1 - a, a, -(1 - b), -b), gradients s c_k n,
+// so the corrections w_k c_k lambda s n sum to zero momentum (sum_k c_k = 0).
 #pragma once
 
+#include <array>
 #include <vector>
 
 #include "pbd_cloth/contact.h"
@@ -12,47 +32,60 @@
 
 namespace pbd_cloth {
 
-struct VertexTrianglePair {
-  int vertex = 0;
-  int triangle[3] = {0, 0, 0};
-  double side = 1.0;  // s: +1 in front of the triangle (its normal side), -1 behind
+struct SelfContactPair {
+  // Vertex-triangle: the vertex, then the triangle's corners. Edge-edge: one edge, then the other.
+  int index[4] = {0, 0, 0, 0};
+  bool edge_edge = false;
+  double side = 0.0;       // s: +1 or -1; 0 until it is known (parallel edges at the step start)
   double allowance = 0.0;  // approach closer than h tolerated this step (allowanceFor)
   ContactState state;
 };
 
 class SelfCollision {
  public:
+  // Sizes the buffers and lists the mesh's edges.
   void reserve(const Particles& particles, const ClothTopology& topology);
 
-  // Broad phase, once per step: each cloth vertex whose swept box [lo, hi] comes within the
-  // thickness of a triangle's swept box, except the triangle's own vertices and their grid
-  // neighbours (a neighbour is within h of the triangle whenever the cloth bends, yet cannot fold
-  // onto it: the bending and stretch constraints own that pair). The side s comes from the
-  // positions at the step start.
+  // Broad phase, once per step: each cloth vertex whose swept box [lo, hi] comes within h of a
+  // triangle's swept box (the triangle's own vertices excepted) and, with `edge_pairs`, each pair
+  // of edges of cells that are not neighbours whose swept boxes come within h. The sides come
+  // from the step-start positions. A repeated broad phase within the step (a particle left its
+  // box) passes edge_pairs = false: it renews the vertex-triangle pairs, the primary contacts, and
+  // keeps the edge-edge pairs of the step start, whose search costs several times more.
   void findPairs(const Particles& particles, const ClothTopology& topology, const Vec3Array& lo,
-                 const Vec3Array& hi, double thickness);
+                 const Vec3Array& hi, double thickness, bool edge_pairs);
 
-  // Pre-stabilisation: pushes vertices closer than h to a triangle apart by at most max_shift, on
-  // the positions before the step's first prediction (no velocity gained).
-  void preStabilize(Particles& particles, double thickness, double max_shift) const;
-  // After pre-stabilisation: how much closer than h each vertex over its triangle may stay this
-  // step (allowanceFor, `slop` a fraction of h; never on the wrong side), measured in `positions`
-  // (those of the step start).
+  // Pre-stabilisation: pushes contacts closer than h by more than the slop (a fraction of h) apart
+  // by at most max_shift, on the positions before the step's first prediction (no velocity).
+  void preStabilize(Particles& particles, double thickness, double max_shift, double slop) const;
+  // After pre-stabilisation: how much closer than h each contact may stay this step
+  // (allowanceFor, `slop` a fraction of h), measured in `positions` (those of the step start).
   void measureAllowances(const Vec3Array& positions, double thickness, double slop);
 
   // One projection pass, then friction; returns the largest correction.
   double project(Particles& particles, double thickness, int substep,
                  const FrictionConfig& friction);
 
-  // Deepest violation h - s (q - p1) . n over pairs whose vertex projects inside its triangle (m).
+  // Deepest violation h - s distance over the contacts that are active (vertex over its
+  // triangle; edges' closest points interior, edges within a few thicknesses) (m).
   double maxPenetration(const Particles& particles, double thickness) const;
   int pairCount() const { return static_cast<int>(pairs_.size()); }
 
  private:
-  SpatialHash hash_;
+  void findVertexTrianglePairs(const Particles& particles, const ClothTopology& topology);
+  void findEdgeEdgePairs(const Particles& particles, int cols);
+
+  std::vector<std::array<int, 2>> edges_;
+  SpatialHash triangle_hash_;
+  SpatialHash edge_hash_;
   Vec3Array grown_lo_;  // vertex boxes grown by h / 2
   Vec3Array grown_hi_;
-  std::vector<VertexTrianglePair> pairs_;
+  Vec3Array triangle_lo_;  // triangle boxes: the union of their vertices' grown boxes
+  Vec3Array triangle_hi_;
+  Vec3Array edge_lo_;  // edge boxes: the union of their two vertices' grown boxes
+  Vec3Array edge_hi_;
+  std::vector<SelfContactPair> pairs_;  // edge-edge pairs first, then vertex-triangle pairs
+  int edge_pair_count_ = 0;
 };
 
 }  // namespace pbd_cloth

@@ -41,6 +41,9 @@ Frame frameFromPose(const Pose& pose);
 // Pose at fraction s of the motion a -> b: linear position, slerp orientation.
 Frame interpolateFrame(const Pose& a, const Pose& b, double s);
 
+// World-space bounding box of the shape placed at `frame` (infinite for a plane).
+void worldBounds(const Shape& shape, const Frame& frame, Vec3& lo, Vec3& hi);
+
 // Signed distance of the local point x to the surface (negative inside) and the outward unit
 // normal of the nearest surface point (inside: the direction of the shortest way out). The distance
 // is exact for all four shapes, hence 1-Lipschitz, which sweepSphere relies on.
@@ -52,6 +55,9 @@ double signedDistance(const Shape& shape, const Vec3& x);
 // Sphere tracing (Hart 1996): a step of (distance - r) never crosses the surface because the
 // distance is 1-Lipschitz, so a segment that crosses a thin plate is always caught. Returns false
 // when the whole segment stays free (or, for a grazing path, when the march does not converge).
-bool sweepSphere(const Shape& shape, const Vec3& a, const Vec3& b, double r, double& t);
+// `start_distance` and `start_normal` are signedDistance at a (the caller has them already); on a
+// hit, `normal` is the outward normal at the entry point.
+bool sweepSphere(const Shape& shape, const Vec3& a, const Vec3& b, double r, double start_distance,
+                 const Vec3& start_normal, double& t, Vec3& normal);
 
 }  // namespace pbd_cloth

@@ -63,6 +63,8 @@ class Simulation {
   const ObstacleConfig& obstacle(int obstacle) const { return collisions_.obstacles()[obstacle]; }
   // The pose the obstacle reaches at the end of the next step (moved as a kinematic body).
   void setObstaclePose(int obstacle, const Pose& pose);
+  // The contact handling: candidate counts of the last step (collisions().stats()).
+  const Collisions& collisions() const { return collisions_; }
 
   // Live tuning: applied at the next step. Throws ConfigError on an invalid value.
   void setSolverConfig(const SolverConfig& solver);

@@ -8,8 +8,10 @@ namespace pbd_cloth {
 
 namespace {
 
-// An overlap left after pre-stabilisation deeper than this fraction of the contact distance is
-// kept from growing rather than projected away during the step (allowanceFor in contact.h).
+// Overlaps deeper than this fraction of the contact distance at a step start are pre-existing:
+// pre-stabilised and, as far as the shift cap leaves them, kept from growing rather than projected
+// away during the step (allowanceFor in contact.h). The residual overlap of a loaded stack, which
+// the projection and its friction handle, stays below it.
 constexpr double kOverlapSlop = 0.02;
 // Swept boxes grow by this fraction of the particle radius to absorb the difference between the
 // unconstrained prediction and the constrained motion.
@@ -33,6 +35,8 @@ void Collisions::configure(const SceneConfig& scene) {
     frame_begin_.push_back(frameFromPose(obstacle.pose));
   }
   frame_end_ = frame_begin_;
+  obstacle_lo_.assign(obstacles_.size(), Vec3::Zero());
+  obstacle_hi_.assign(obstacles_.size(), Vec3::Zero());
 }
 
 bool Collisions::setObstacleTarget(int obstacle, const Pose& target) {
@@ -53,12 +57,12 @@ void Collisions::prepare(const Particles& particles, const ClothTopology& topolo
   box_hi_.assign(n, Vec3::Zero());
   particle_contacts_.reserve(particles);
   self_collision_pairs_.reserve(particles, topology);
-  substep_ = 0;
+  substep_ = step_ = 0;
   checked_substep_ = -1;
   dt_ = 0.0;
   stats_ = CollisionStats();
   computeSweptBoxes(particles, 0.0);
-  findCandidates(particles, topology);
+  findCandidates(particles, topology, true);
 }
 
 bool Collisions::particleContactsActive(const Particles& particles) const {
@@ -70,9 +74,9 @@ bool Collisions::selfCollisionActive(const ClothTopology& topology) const {
 }
 
 // The motion bound of the broad phase: from where the particle is to its unconstrained prediction
-// time_left later (x + v T + g T^2, above the substepped free flight x + v T + g T^2 (1 + 1/n) / 2),
-// grown by half the radius for the constraints' deviation from it. Kinematic particles move exactly
-// to their prescribed target. After predict() the substep start is included as well.
+// time_left later (x + v T + g T^2, above the substepped free flight x + v T + g T^2 (1 + 1/n) /
+// 2), grown by half the radius for the constraints' deviation from it. Kinematic particles move
+// exactly to their prescribed target. After predict() the substep start is included as well.
 void Collisions::computeSweptBoxes(const Particles& p, double time_left) {
   const bool mid_step = checked_substep_ >= 0;
   for (int i = 0; i < p.size(); ++i) {
@@ -95,15 +99,17 @@ void Collisions::computeSweptBoxes(const Particles& p, double time_left) {
   }
 }
 
-void Collisions::findCandidates(const Particles& particles, const ClothTopology& topology) {
+void Collisions::findCandidates(const Particles& particles, const ClothTopology& topology,
+                                bool step_start) {
   if (particleContactsActive(particles)) {
     particle_contacts_.findPairs(particles, box_lo_, box_hi_);
   }
   if (selfCollisionActive(topology)) {
-    self_collision_pairs_.findPairs(particles, topology, box_lo_, box_hi_, thickness_);
+    self_collision_pairs_.findPairs(particles, topology, box_lo_, box_hi_, thickness_, step_start);
   }
   stats_.particle_pairs = particle_contacts_.pairCount();
-  stats_.vertex_triangle_pairs = selfCollisionActive(topology) ? self_collision_pairs_.pairCount() : 0;
+  stats_.vertex_triangle_pairs =
+      selfCollisionActive(topology) ? self_collision_pairs_.pairCount() : 0;
   ++stats_.broad_phase_runs;
 }
 
@@ -119,6 +125,7 @@ bool Collisions::leftSweptBoxes(const Particles& p) const {
 
 void Collisions::beginStep(Particles& particles, const ClothTopology& topology, double dt) {
   dt_ = dt;
+  ++step_;
   stats_.broad_phase_runs = 0;
   checked_substep_ = -1;
   for (std::size_t k = 0; k < obstacles_.size(); ++k) {
@@ -128,13 +135,15 @@ void Collisions::beginStep(Particles& particles, const ClothTopology& topology, 
   const bool self_collision = selfCollisionActive(topology);
   if (particle_contacts || self_collision) {
     computeSweptBoxes(particles, dt);
-    findCandidates(particles, topology);
+    findCandidates(particles, topology, true);
   }
   // Overlaps the step starts with are separated here, before predict() copies the positions into
   // substep_start, so the separation is no velocity (Macklin et al. 2014, sec. 4.4).
   const double max_shift = max_separation_speed_ * dt;
-  if (particle_contacts) particle_contacts_.preStabilize(particles, max_shift);
-  if (self_collision) self_collision_pairs_.preStabilize(particles, thickness_, max_shift);
+  if (particle_contacts) particle_contacts_.preStabilize(particles, max_shift, kOverlapSlop);
+  if (self_collision) {
+    self_collision_pairs_.preStabilize(particles, thickness_, max_shift, kOverlapSlop);
+  }
   preStabilizeObstacles(particles, max_shift);
   particles.step_start = particles.position;
   if (particle_contacts) {
@@ -148,14 +157,19 @@ void Collisions::beginStep(Particles& particles, const ClothTopology& topology, 
 void Collisions::setSubstepFraction(double s_begin, double s_end) {
   if (substep_ == INT_MAX) {
     // Stamps wrap after 2^31 substeps (weeks of running): forget every state, none is current.
-    substep_ = 0;
-    for (ContactState& state : obstacle_contacts_) state.substep = -1;
+    substep_ = step_ = 0;
+    for (ContactState& state : obstacle_contacts_) state.forget();
   }
   ++substep_;
   substep_begin_ = s_begin;
   for (std::size_t k = 0; k < obstacles_.size(); ++k) {
     frame_begin_[k] = interpolateFrame(obstacles_[k].pose, obstacle_targets_[k], s_begin);
     frame_end_[k] = interpolateFrame(obstacles_[k].pose, obstacle_targets_[k], s_end);
+    Vec3 lo, hi;
+    worldBounds(shapes_[k], frame_begin_[k], obstacle_lo_[k], obstacle_hi_[k]);
+    worldBounds(shapes_[k], frame_end_[k], lo, hi);
+    obstacle_lo_[k] = obstacle_lo_[k].cwiseMin(lo);
+    obstacle_hi_[k] = obstacle_hi_[k].cwiseMax(hi);
   }
 }
 
@@ -168,7 +182,7 @@ double Collisions::project(Particles& particles, const ClothTopology& topology) 
     checked_substep_ = substep_;
     if ((particle_contacts || self_collision) && leftSweptBoxes(particles)) {
       computeSweptBoxes(particles, (1.0 - substep_begin_) * dt_);
-      findCandidates(particles, topology);
+      findCandidates(particles, topology, false);
       if (particle_contacts) {
         particle_contacts_.measureAllowances(particles, particles.step_start, kOverlapSlop);
       }
@@ -179,11 +193,12 @@ double Collisions::project(Particles& particles, const ClothTopology& topology) 
   }
   double max_change = 0.0;
   if (particle_contacts) {
-    max_change = std::max(max_change, particle_contacts_.project(particles, substep_, friction_));
+    max_change =
+        std::max(max_change, particle_contacts_.project(particles, substep_, step_, friction_));
   }
   if (self_collision) {
-    max_change = std::max(max_change,
-                          self_collision_pairs_.project(particles, thickness_, substep_, friction_));
+    max_change = std::max(
+        max_change, self_collision_pairs_.project(particles, thickness_, substep_, friction_));
   }
   max_change = std::max(max_change, projectObstacles(particles));
   max_change = std::max(max_change, projectBounds(particles));
@@ -199,7 +214,7 @@ void Collisions::preStabilizeObstacles(Particles& p, double max_shift) {
       const double clearance =
           signedDistance(shapes_[k], frame_end_[k].toLocal(p.position[i]), normal) - p.radius[i];
       double left = 0.0;
-      if (clearance < 0.0) {
+      if (clearance < -kOverlapSlop * p.radius[i]) {
         const double shift = std::min(-clearance, max_shift);
         p.position[i] += shift * (frame_end_[k].rotation * normal);
         left = -clearance - shift;
@@ -223,6 +238,16 @@ double Collisions::projectObstacles(Particles& p) {
     Vec3& x = p.position[i];
     const double r = p.radius[i];
     for (std::size_t k = 0; k < count; ++k) {
+      const std::size_t slot = static_cast<std::size_t>(i) * count + k;
+      ContactState& state = obstacle_contacts_[slot];
+      const bool pushed = state.substep == substep_ && state.depth > 0.0;
+      // Cheap cull: a particle whose path of this substep stays out of the obstacle's bounds
+      // (grown by its radius) cannot touch it.
+      const double reach = r + (x - p.substep_start[i]).norm();
+      if (!pushed && ((x.array() + reach < obstacle_lo_[k].array()).any() ||
+                      (x.array() - reach > obstacle_hi_[k].array()).any())) {
+        continue;
+      }
       const Shape& shape = shapes_[k];
       const Frame& begin = frame_begin_[k];
       const Frame& end = frame_end_[k];
@@ -231,38 +256,40 @@ double Collisions::projectObstacles(Particles& p) {
       const double clearance = signedDistance(shape, b, normal_b) - r;
       const Vec3 a = begin.toLocal(p.substep_start[i]);  // ... and where it was
       // The distance is 1-Lipschitz: a segment whose end is farther from the surface than its
-      // length never touched the shape.
-      if (clearance >= (b - a).norm()) continue;
-      const std::size_t slot = static_cast<std::size_t>(i) * count + k;
-      ContactState& state = obstacle_contacts_[slot];
-      if (!state.current(substep_)) state.begin(substep_);
+      // length never touched the shape (unless it was pushed out earlier in this substep).
+      if (clearance >= (b - a).norm() && !pushed) continue;
+      Vec3 normal_a;
+      const double start_distance = signedDistance(shape, a, normal_a);
+      // The window's base is the particle's place on the shape when it began: carried by the
+      // shape, it is the point under the particle that friction holds it to.
+      if (state.beginSubstep(substep_, step_, start_distance < (1.0 + kTouchGap) * r)) {
+        state.base = a;
+      }
       const double allowance = obstacle_allowance_[slot];
       double c = clearance;
       Vec3 normal = normal_b;
       double t = 0.0;
+      Vec3 normal_entry;
       if (allowance > 0.0) {
         c = clearance + allowance;  // started inside: only not deeper
-      } else if (sweepSphere(shape, a, b, r, t)) {
-        Vec3 normal_entry;
-        const Vec3 entry = a + t * (b - a);
-        signedDistance(shape, entry, normal_entry);
+      } else if (sweepSphere(shape, a, b, r, start_distance, normal_a, t, normal_entry)) {
         if (!(clearance < 0.0 && normal_b.dot(normal_entry) > 0.0)) {
           // Crossed or cut through: back onto the tangent plane where the sphere entered.
-          c = (b - entry).dot(normal_entry);
+          c = (b - (a + t * (b - a))).dot(normal_entry);
           normal = normal_entry;
         }
       }
-      if (c < 0.0) {
+      if (c < 0.0 || state.depth > 0.0) {
         const Vec3 n = end.rotation * normal;
-        x -= c * n;
-        state.depth -= c;
+        const double push = contactIncrement(c, state);
+        x += push * n;
         state.normal = n;
-        max_change = std::max(max_change, -c);
+        max_change = std::max(max_change, std::abs(push));
       }
-      if (state.depth > 0.0) {
-        // The shape carries the point under the particle's substep start along with it: the
-        // relative displacement is measured from there, so a moving shape drags what rests on it.
-        x += frictionCorrection(x - end.toWorld(a), state, friction_);
+      if (state.frictionDepth() > 0.0) {
+        // The shape carries the point under the particle along with it: the relative
+        // displacement is measured from there, so a moving shape drags what rests on it.
+        x += frictionCorrection(x - end.toWorld(state.base), state, friction_);
       }
     }
   }
@@ -288,8 +315,7 @@ void Collisions::endStep() {
   for (std::size_t k = 0; k < obstacles_.size(); ++k) obstacles_[k].pose = obstacle_targets_[k];
 }
 
-double Collisions::maxPenetration(const Particles& particles,
-                                  const ClothTopology& topology) const {
+double Collisions::maxPenetration(const Particles& particles, const ClothTopology& topology) const {
   double depth = 0.0;
   if (bounds_.enabled) {
     for (int i = 0; i < particles.size(); ++i) {

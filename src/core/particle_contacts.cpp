@@ -10,10 +10,6 @@ namespace {
 // Below this centre distance two particles have no direction between them (coincident).
 constexpr double kMinDistance = 1e-12;
 
-bool boxesOverlap(const Vec3& lo_a, const Vec3& hi_a, const Vec3& lo_b, const Vec3& hi_b) {
-  return (lo_a.array() <= hi_b.array()).all() && (lo_b.array() <= hi_a.array()).all();
-}
-
 // Unit vector from j to i; coincident particles fall back on where they were at the substep start,
 // then on +z, so the pair still separates instead of dividing by zero.
 Vec3 separationDirection(const Particles& p, int i, int j, const Vec3& delta, double distance) {
@@ -40,21 +36,19 @@ void ParticleContacts::findPairs(const Particles& p, const Vec3Array& lo, const 
   if (n == p.cloth_count) return;  // no granular particles
   grown_lo_.resize(n);
   grown_hi_.resize(n);
+  // The cell: the mean box extent (the boxes of fast particles are filed in several cells).
   double cell = 0.0;
   for (int k = 0; k < n; ++k) {
     grown_lo_[k] = lo[k].array() - p.radius[k];
     grown_hi_[k] = hi[k].array() + p.radius[k];
-    cell = std::max(cell, (grown_hi_[k] - grown_lo_[k]).maxCoeff());
+    cell += (grown_hi_[k] - grown_lo_[k]).maxCoeff() / n;
   }
   if (!(cell > 0.0) || !std::isfinite(cell)) return;
-  hash_.build(grown_lo_, n, cell);
+  hash_.build(grown_lo_, grown_hi_, n, cell);
   for (int i = p.cloth_count; i < n; ++i) {
-    // A box's lower corner lies at most one cell below any box it overlaps.
-    const Vec3 query_lo = grown_lo_[i].array() - cell;
-    hash_.forEachInRange(query_lo, grown_hi_[i], [&](int j) {
+    hash_.forEachOverlapping(grown_lo_[i], grown_hi_[i], [&](int j) {
       if (j == i || (j >= p.cloth_count && j < i)) return;  // each granular pair once
       if (p.inverse_mass[i] == 0.0 && p.inverse_mass[j] == 0.0) return;
-      if (!boxesOverlap(grown_lo_[i], grown_hi_[i], grown_lo_[j], grown_hi_[j])) return;
       ParticlePair pair;
       pair.i = i;
       pair.j = j;
@@ -63,15 +57,16 @@ void ParticleContacts::findPairs(const Particles& p, const Vec3Array& lo, const 
   }
 }
 
-void ParticleContacts::preStabilize(Particles& p, double max_shift) const {
+void ParticleContacts::preStabilize(Particles& p, double max_shift, double slop) const {
   for (const ParticlePair& pair : pairs_) {
     const double wi = p.inverse_mass[pair.i], wj = p.inverse_mass[pair.j];
     const double w = wi + wj;
     if (w == 0.0) continue;
     const Vec3 delta = p.position[pair.i] - p.position[pair.j];
     const double distance = delta.norm();
-    const double overlap = p.radius[pair.i] + p.radius[pair.j] - distance;
-    if (overlap <= 0.0) continue;
+    const double contact_distance = p.radius[pair.i] + p.radius[pair.j];
+    const double overlap = contact_distance - distance;
+    if (overlap <= slop * contact_distance) continue;
     const Vec3 n = separationDirection(p, pair.i, pair.j, delta, distance);
     const double shift = std::min(overlap, max_shift);
     p.position[pair.i] += (wi / w * shift) * n;
@@ -87,7 +82,8 @@ void ParticleContacts::measureAllowances(const Particles& p, const Vec3Array& x,
   }
 }
 
-double ParticleContacts::project(Particles& p, int substep, const FrictionConfig& friction) {
+double ParticleContacts::project(Particles& p, int substep, int step,
+                                 const FrictionConfig& friction) {
   double max_change = 0.0;
   for (ParticlePair& pair : pairs_) {
     const int i = pair.i, j = pair.j;
@@ -96,22 +92,25 @@ double ParticleContacts::project(Particles& p, int substep, const FrictionConfig
     if (w == 0.0) continue;
     const double contact_distance = p.radius[i] + p.radius[j];
     ContactState& state = pair.state;
-    if (!state.current(substep)) state.begin(substep);
+    const Vec3 start = p.substep_start[i] - p.substep_start[j];
+    if (state.beginSubstep(substep, step, start.norm() < (1.0 + kTouchGap) * contact_distance)) {
+      state.base = start;
+    }
     const Vec3 delta = p.position[i] - p.position[j];
     const double distance = delta.norm();
     // Seed eq. particle_particle_constraint, solved like a stretch constraint: the correction
     // along the centre line is split by inverse mass, which conserves momentum.
     const double c = distance - (contact_distance - pair.allowance);
-    if (c < 0.0) {
+    if (c < 0.0 || state.depth > 0.0) {
       const Vec3 n = separationDirection(p, i, j, delta, distance);
-      p.position[i] -= (wi / w * c) * n;
-      p.position[j] += (wj / w * c) * n;
-      state.depth -= c;
+      const double push = contactIncrement(c, state);
+      p.position[i] += (wi / w * push) * n;
+      p.position[j] -= (wj / w * push) * n;
       state.normal = n;
-      max_change = std::max(max_change, -c * std::max(wi, wj) / w);
+      max_change = std::max(max_change, std::abs(push) * std::max(wi, wj) / w);
     }
-    if (state.depth > 0.0) {
-      const Vec3 relative = (p.position[i] - p.substep_start[i]) - (p.position[j] - p.substep_start[j]);
+    if (state.frictionDepth() > 0.0) {
+      const Vec3 relative = (p.position[i] - p.position[j]) - state.base;
       const Vec3 correction = frictionCorrection(relative, state, friction);
       p.position[i] += (wi / w) * correction;
       p.position[j] -= (wj / w) * correction;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <utility>
 
 namespace pbd_cloth {
 
@@ -10,143 +11,251 @@ namespace {
 
 // A triangle whose sine of the smallest angle is below ~1e-8 has no usable normal: skipped.
 constexpr double kDegenerate = 1e-16;
+// Edges closer to parallel than ~3 degrees (squared sine) have no stable common normal: the
+// vertex-triangle contacts of their end points keep such layers apart instead.
+constexpr double kParallel = 0.0027;
+// Edges keep their side only within this many thicknesses of each other (see project()), and a
+// contact pushes at most kMaxPush thicknesses per pass.
+constexpr double kEdgeBand = 3.0;
+constexpr double kMaxPush = 0.5;
 // The projected point may lie this far (in barycentric units) outside the triangle and still count
 // as inside, so a vertex over a shared edge is never missed by both triangles through rounding.
 constexpr double kInsideTolerance = 1e-6;
 
-// The vertex q over the triangle's plane: unit normal n = p21 x p31 / |p21 x p31| (seed), signed
-// distance (q - p1) . n, and the barycentric coordinates of q's projection onto the plane.
-struct TriangleProjection {
-  Vec3 normal;
+// A contact in the current positions: the unit normal n (before the side is applied), the signed
+// distance n . sum_k c_k x_k, the coefficients c_k of the four points, and whether the contact is
+// active (vertex over the triangle, edges' closest points interior to both).
+struct ContactGeometry {
+  Vec3 normal = Vec3::UnitZ();
   double distance = 0.0;
-  double weight[3] = {0.0, 0.0, 0.0};
-
-  bool inside() const {
-    return weight[0] >= -kInsideTolerance && weight[1] >= -kInsideTolerance &&
-           weight[2] >= -kInsideTolerance;
-  }
+  double coefficient[4] = {0.0, 0.0, 0.0, 0.0};
+  bool inside = false;
 };
 
-bool projectOntoTriangle(const Vec3& q, const Vec3& p1, const Vec3& p2, const Vec3& p3,
-                         TriangleProjection& out) {
+// The vertex q over the plane of the triangle (p1, p2, p3): n = p21 x p31 / |p21 x p31| (seed),
+// distance (q - p1) . n, coefficients 1 and minus the barycentric weights of q's projection.
+bool vertexTriangle(const Vec3& q, const Vec3& p1, const Vec3& p2, const Vec3& p3,
+                    ContactGeometry& g) {
   const Vec3 e1 = p2 - p1, e2 = p3 - p1, v = q - p1;
   const Vec3 cross = e1.cross(e2);
   const double d00 = e1.squaredNorm(), d11 = e2.squaredNorm(), d01 = e1.dot(e2);
   const double area2 = cross.squaredNorm();
   if (!(area2 > kDegenerate * d00 * d11)) return false;  // zero-area (or non-finite) triangle
-  out.normal = cross / std::sqrt(area2);
-  out.distance = v.dot(out.normal);
+  g.normal = cross / std::sqrt(area2);
+  g.distance = v.dot(g.normal);
   const double d20 = v.dot(e1), d21 = v.dot(e2);
   const double denominator = d00 * d11 - d01 * d01;
-  out.weight[1] = (d11 * d20 - d01 * d21) / denominator;
-  out.weight[2] = (d00 * d21 - d01 * d20) / denominator;
-  out.weight[0] = 1.0 - out.weight[1] - out.weight[2];
+  const double b2 = (d11 * d20 - d01 * d21) / denominator;
+  const double b3 = (d00 * d21 - d01 * d20) / denominator;
+  const double b1 = 1.0 - b2 - b3;
+  g.coefficient[0] = 1.0;
+  g.coefficient[1] = -b1;
+  g.coefficient[2] = -b2;
+  g.coefficient[3] = -b3;
+  g.inside = b1 >= -kInsideTolerance && b2 >= -kInsideTolerance && b3 >= -kInsideTolerance;
   return true;
 }
 
-bool boxesOverlap(const Vec3& lo_a, const Vec3& hi_a, const Vec3& lo_b, const Vec3& hi_b) {
-  return (lo_a.array() <= hi_b.array()).all() && (lo_b.array() <= hi_a.array()).all();
+// Edges p1p2 and q1q2: n = p21 x q21 normalised, distance (p1 - q1) . n, and the closest points
+// p1 + a p21, q1 + b q21 of the two lines (Ericson 2005, sec. 5.1.9), active when a and b are
+// interior (an end point is the vertex-triangle contacts' business).
+bool edgeEdge(const Vec3& p1, const Vec3& p2, const Vec3& q1, const Vec3& q2, ContactGeometry& g) {
+  const Vec3 d1 = p2 - p1, d2 = q2 - q1, r = p1 - q1;
+  const Vec3 cross = d1.cross(d2);
+  const double aa = d1.squaredNorm(), ee = d2.squaredNorm();
+  const double sine2 = cross.squaredNorm();
+  if (!(sine2 > kParallel * aa * ee)) return false;
+  g.normal = cross / std::sqrt(sine2);
+  g.distance = r.dot(g.normal);
+  const double bb = d1.dot(d2), cc = d1.dot(r), ff = d2.dot(r);
+  const double denominator = aa * ee - bb * bb;
+  const double a = (bb * ff - cc * ee) / denominator;
+  const double b = (aa * ff - bb * cc) / denominator;
+  g.coefficient[0] = 1.0 - a;
+  g.coefficient[1] = a;
+  g.coefficient[2] = -(1.0 - b);
+  g.coefficient[3] = -b;
+  g.inside = a > kInsideTolerance && a < 1.0 - kInsideTolerance && b > kInsideTolerance &&
+             b < 1.0 - kInsideTolerance;
+  return true;
+}
+
+bool geometry(const SelfContactPair& pair, const Vec3Array& x, ContactGeometry& g) {
+  const int* k = pair.index;
+  return pair.edge_edge ? edgeEdge(x[k[0]], x[k[1]], x[k[2]], x[k[3]], g)
+                        : vertexTriangle(x[k[0]], x[k[1]], x[k[2]], x[k[3]], g);
+}
+
+// Generalised inverse mass sum_k c_k^2 w_k of the four-point contact.
+double inverseMass(const SelfContactPair& pair, const ContactGeometry& g, const Particles& p) {
+  double w = 0.0;
+  for (int k = 0; k < 4; ++k) {
+    w += g.coefficient[k] * g.coefficient[k] * p.inverse_mass[pair.index[k]];
+  }
+  return w;
+}
+
+// Moves the four points so that sum_k c_k x_k changes by `change` (a vector): x_k += w_k c_k
+// change / w.
+void distribute(const SelfContactPair& pair, const ContactGeometry& g, double w, const Vec3& change,
+                Particles& p) {
+  for (int k = 0; k < 4; ++k) {
+    const int i = pair.index[k];
+    p.position[i] += (p.inverse_mass[i] * g.coefficient[k] / w) * change;
+  }
+}
+
+bool allKinematic(const Particles& p, int a, int b, int c, int d) {
+  return p.inverse_mass[a] == 0.0 && p.inverse_mass[b] == 0.0 && p.inverse_mass[c] == 0.0 &&
+         p.inverse_mass[d] == 0.0;
 }
 
 }  // namespace
 
 void SelfCollision::reserve(const Particles& particles, const ClothTopology& topology) {
-  hash_.reserve(particles.cloth_count);
+  const int triangles = topology.triangleCount();
+  edges_.clear();
+  for (int t = 0; t < triangles; ++t) {
+    for (int e = 0; e < 3; ++e) {
+      const int a = static_cast<int>(topology.triangles[3 * t + e]);
+      const int b = static_cast<int>(topology.triangles[3 * t + (e + 1) % 3]);
+      edges_.push_back({std::min(a, b), std::max(a, b)});
+    }
+  }
+  std::sort(edges_.begin(), edges_.end());
+  edges_.erase(std::unique(edges_.begin(), edges_.end()), edges_.end());
+  const int edges = static_cast<int>(edges_.size());
+  triangle_hash_.reserve(triangles);
+  edge_hash_.reserve(edges);
   grown_lo_.reserve(particles.cloth_count);
   grown_hi_.reserve(particles.cloth_count);
-  pairs_.reserve(4 * static_cast<std::size_t>(topology.triangleCount()));
+  triangle_lo_.reserve(triangles);
+  triangle_hi_.reserve(triangles);
+  edge_lo_.reserve(edges);
+  edge_hi_.reserve(edges);
+  // Typical scenes need 2-4 candidates per triangle and edge; a cloth falling fast into a fold
+  // needs more, and capacity then grows once and stays.
+  pairs_.reserve(8 * static_cast<std::size_t>(triangles + edges));
 }
 
 void SelfCollision::findPairs(const Particles& p, const ClothTopology& topology,
-                              const Vec3Array& lo, const Vec3Array& hi, double thickness) {
-  pairs_.clear();
-  const int vertices = p.cloth_count;
-  const int triangles = topology.triangleCount();
-  if (triangles == 0) return;
-  const auto& tri = topology.triangles;
-  // Vertex and triangle boxes each grown by h / 2: they overlap when within h of each other.
+                              const Vec3Array& lo, const Vec3Array& hi, double thickness,
+                              bool edge_pairs) {
+  // Edge-edge pairs first, vertex-triangle pairs after them: a repeated broad phase within the
+  // step replaces only the latter.
+  pairs_.resize(edge_pairs ? 0 : edge_pair_count_);
+  if (topology.triangleCount() == 0) return;
+  // Vertex boxes grown by h / 2: two boxes built from them overlap when within h of each other.
   const double half = 0.5 * thickness;
+  const int vertices = p.cloth_count;
   grown_lo_.resize(vertices);
   grown_hi_.resize(vertices);
-  double cell = 0.0;
   for (int v = 0; v < vertices; ++v) {
     grown_lo_[v] = lo[v].array() - half;
     grown_hi_[v] = hi[v].array() + half;
-    cell = std::max(cell, (grown_hi_[v] - grown_lo_[v]).maxCoeff());
   }
-  // A cell about the size of a triangle's box keeps each query to a few cells.
-  double triangle_extent = 0.0;
-  for (int t = 0; t < triangles; ++t) {
-    Vec3 t_lo = grown_lo_[tri[3 * t]], t_hi = grown_hi_[tri[3 * t]];
-    for (int k = 1; k < 3; ++k) {
-      t_lo = t_lo.cwiseMin(grown_lo_[tri[3 * t + k]]);
-      t_hi = t_hi.cwiseMax(grown_hi_[tri[3 * t + k]]);
-    }
-    triangle_extent += (t_hi - t_lo).maxCoeff();
+  if (edge_pairs) {
+    findEdgeEdgePairs(p, topology.cols);
+    edge_pair_count_ = static_cast<int>(pairs_.size());
   }
-  cell = std::max(cell, triangle_extent / triangles);
-  if (!(cell > 0.0) || !std::isfinite(cell)) return;
-  hash_.build(grown_lo_, vertices, cell);
+  findVertexTrianglePairs(p, topology);
+}
 
+// Triangles are hashed (each in the cells its box covers) and every vertex queries its small
+// box: fewer, shorter queries than the other way round. The cell is the mean triangle box.
+void SelfCollision::findVertexTrianglePairs(const Particles& p, const ClothTopology& topology) {
+  const auto& tri = topology.triangles;
+  const int triangles = topology.triangleCount();
+  triangle_lo_.resize(triangles);
+  triangle_hi_.resize(triangles);
+  double cell = 0.0;
   for (int t = 0; t < triangles; ++t) {
-    const int a = static_cast<int>(tri[3 * t]), b = static_cast<int>(tri[3 * t + 1]),
-              c = static_cast<int>(tri[3 * t + 2]);
-    const Vec3 t_lo = grown_lo_[a].cwiseMin(grown_lo_[b]).cwiseMin(grown_lo_[c]);
-    const Vec3 t_hi = grown_hi_[a].cwiseMax(grown_hi_[b]).cwiseMax(grown_hi_[c]);
-    const bool triangle_kinematic =
-        p.inverse_mass[a] == 0.0 && p.inverse_mass[b] == 0.0 && p.inverse_mass[c] == 0.0;
-    const Vec3 query_lo = t_lo.array() - cell;  // a vertex box starts at most one cell lower
-    hash_.forEachInRange(query_lo, t_hi, [&](int v) {
-      if (v == a || v == b || v == c) return;
-      if (triangle_kinematic && p.inverse_mass[v] == 0.0) return;
-      if (!boxesOverlap(grown_lo_[v], grown_hi_[v], t_lo, t_hi)) return;
-      TriangleProjection start;
-      if (!projectOntoTriangle(p.step_start[v], p.step_start[a], p.step_start[b],
-                               p.step_start[c], start)) {
+    const unsigned a = tri[3 * t], b = tri[3 * t + 1], c = tri[3 * t + 2];
+    triangle_lo_[t] = grown_lo_[a].cwiseMin(grown_lo_[b]).cwiseMin(grown_lo_[c]);
+    triangle_hi_[t] = grown_hi_[a].cwiseMax(grown_hi_[b]).cwiseMax(grown_hi_[c]);
+    cell += (triangle_hi_[t] - triangle_lo_[t]).maxCoeff() / triangles;
+  }
+  if (!(cell > 0.0) || !std::isfinite(cell)) return;
+  triangle_hash_.build(triangle_lo_, triangle_hi_, triangles, cell);
+  for (int v = 0; v < p.cloth_count; ++v) {
+    triangle_hash_.forEachOverlapping(grown_lo_[v], grown_hi_[v], [&](int t) {
+      const int a = static_cast<int>(tri[3 * t]), b = static_cast<int>(tri[3 * t + 1]),
+                c = static_cast<int>(tri[3 * t + 2]);
+      if (v == a || v == b || v == c || allKinematic(p, v, a, b, c)) return;
+      ContactGeometry start;
+      if (!vertexTriangle(p.step_start[v], p.step_start[a], p.step_start[b], p.step_start[c],
+                          start)) {
         return;
       }
-      VertexTrianglePair pair;
-      pair.vertex = v;
-      pair.triangle[0] = a;
-      pair.triangle[1] = b;
-      pair.triangle[2] = c;
+      SelfContactPair pair;
+      pair.index[0] = v;
+      pair.index[1] = a;
+      pair.index[2] = b;
+      pair.index[3] = c;
       pair.side = start.distance >= 0.0 ? 1.0 : -1.0;
       pairs_.push_back(pair);
     });
   }
 }
 
-void SelfCollision::preStabilize(Particles& p, double thickness, double max_shift) const {
-  for (const VertexTrianglePair& pair : pairs_) {
-    const int v = pair.vertex, a = pair.triangle[0], b = pair.triangle[1], c = pair.triangle[2];
-    TriangleProjection g;
-    if (!projectOntoTriangle(p.position[v], p.position[a], p.position[b], p.position[c], g) ||
-        !g.inside()) {
-      continue;
+void SelfCollision::findEdgeEdgePairs(const Particles& p, int cols) {
+  // Edges of one grid cell or of neighbouring cells (some end points within one row and column)
+  // are left out: nearly coplanar while the cloth is smooth, they would get a side by chance, and
+  // folding them onto each other is already stopped by the vertex-triangle contacts.
+  auto near = [cols](int u, int v) {
+    const int dr = u / cols - v / cols, dc = u % cols - v % cols;
+    return dr >= -1 && dr <= 1 && dc >= -1 && dc <= 1;
+  };
+  const int edges = static_cast<int>(edges_.size());
+  edge_lo_.resize(edges);
+  edge_hi_.resize(edges);
+  double cell = 0.0;
+  for (int e = 0; e < edges; ++e) {
+    const int a = edges_[e][0], b = edges_[e][1];
+    edge_lo_[e] = grown_lo_[a].cwiseMin(grown_lo_[b]);
+    edge_hi_[e] = grown_hi_[a].cwiseMax(grown_hi_[b]);
+    cell += (edge_hi_[e] - edge_lo_[e]).maxCoeff() / edges;
+  }
+  if (!(cell > 0.0) || !std::isfinite(cell)) return;
+  edge_hash_.build(edge_lo_, edge_hi_, edges, cell);
+  edge_hash_.forEachOverlappingPair([&](int e, int f) {
+    const int a = edges_[e][0], b = edges_[e][1], c = edges_[f][0], d = edges_[f][1];
+    if (near(a, c) || near(a, d) || near(b, c) || near(b, d) || allKinematic(p, a, b, c, d)) {
+      return;
     }
+    SelfContactPair pair;
+    pair.index[0] = a;
+    pair.index[1] = b;
+    pair.index[2] = c;
+    pair.index[3] = d;
+    pair.edge_edge = true;
+    ContactGeometry start;
+    if (geometry(pair, p.step_start, start) && start.distance != 0.0) {
+      pair.side = start.distance > 0.0 ? 1.0 : -1.0;
+    }
+    pairs_.push_back(pair);
+  });
+}
+
+void SelfCollision::preStabilize(Particles& p, double thickness, double max_shift,
+                                 double slop) const {
+  for (const SelfContactPair& pair : pairs_) {
+    ContactGeometry g;
+    if (pair.side == 0.0 || !geometry(pair, p.position, g) || !g.inside) continue;
     const double violation = pair.side * g.distance - thickness;
-    if (violation >= 0.0) continue;
-    const double w = p.inverse_mass[v] + g.weight[0] * g.weight[0] * p.inverse_mass[a] +
-                     g.weight[1] * g.weight[1] * p.inverse_mass[b] +
-                     g.weight[2] * g.weight[2] * p.inverse_mass[c];
+    if (violation >= -slop * thickness) continue;
+    const double w = inverseMass(pair, g, p);
     if (w == 0.0) continue;
-    const Vec3 step = (std::min(-violation, max_shift) / w * pair.side) * g.normal;
-    p.position[v] += p.inverse_mass[v] * step;
-    for (int k = 0; k < 3; ++k) {
-      p.position[pair.triangle[k]] -= (p.inverse_mass[pair.triangle[k]] * g.weight[k]) * step;
-    }
+    distribute(pair, g, w, (std::min(-violation, max_shift) * pair.side) * g.normal, p);
   }
 }
 
 void SelfCollision::measureAllowances(const Vec3Array& x, double thickness, double slop) {
-  for (VertexTrianglePair& pair : pairs_) {
+  for (SelfContactPair& pair : pairs_) {
     pair.allowance = 0.0;
-    TriangleProjection g;
-    if (projectOntoTriangle(x[pair.vertex], x[pair.triangle[0]], x[pair.triangle[1]],
-                            x[pair.triangle[2]], g) &&
-        g.inside()) {
-      pair.allowance =
-          allowanceFor(thickness - std::max(pair.side * g.distance, 0.0), thickness, slop);
+    ContactGeometry g;
+    if (pair.side != 0.0 && geometry(pair, x, g) && g.inside) {
+      pair.allowance = allowanceFor(thickness - pair.side * g.distance, thickness, slop);
     }
   }
 }
@@ -154,54 +263,51 @@ void SelfCollision::measureAllowances(const Vec3Array& x, double thickness, doub
 double SelfCollision::project(Particles& p, double thickness, int substep,
                               const FrictionConfig& friction) {
   double max_change = 0.0;
-  for (VertexTrianglePair& pair : pairs_) {
-    const int v = pair.vertex;
-    const int* t = pair.triangle;
-    const double wv = p.inverse_mass[v];
-    const double wt[3] = {p.inverse_mass[t[0]], p.inverse_mass[t[1]], p.inverse_mass[t[2]]};
+  for (SelfContactPair& pair : pairs_) {
     ContactState& state = pair.state;
-    if (!state.current(substep)) {
-      state.begin(substep);
-      // Beside the triangle the vertex may go round its edge to the other side (a hinge
-      // neighbour rotating about the shared edge, a layer sliding past a fold): the side only
-      // freezes while the vertex is over the triangle, where changing it means passing through.
-      TriangleProjection start;
-      if (projectOntoTriangle(p.substep_start[v], p.substep_start[t[0]], p.substep_start[t[1]],
-                              p.substep_start[t[2]], start) &&
-          !start.inside() && start.distance != 0.0) {
+    // A window of one substep: the relative displacement is measured from substep_start, since
+    // the point under the vertex (or the edges' closest points) changes as the layers slide.
+    if (state.beginSubstep(substep, substep, false)) {
+      // Beside the triangle (edges not facing each other) the vertex may go round the border to
+      // the other side (a hinge neighbour rotating about the shared edge, a layer sliding past a
+      // fold): the side only freezes while the contact is active, where changing it means
+      // passing through.
+      // Nearly parallel edges have no stable common normal (n = p21 x q21 comes out reversed on
+      // the other side of parallel): their side is unknown until they diverge again, and it is
+      // only frozen while they are within kEdgeBand thicknesses, where a change of sign can only
+      // mean that they passed through each other.
+      ContactGeometry start;
+      if (!geometry(pair, p.substep_start, start)) {
+        if (pair.edge_edge) pair.side = 0.0;
+      } else if ((!start.inside || pair.side == 0.0 ||
+                  (pair.edge_edge && std::abs(start.distance) > kEdgeBand * thickness)) &&
+                 start.distance != 0.0) {
         pair.side = start.distance > 0.0 ? 1.0 : -1.0;
       }
     }
-    TriangleProjection g;
-    if (!projectOntoTriangle(p.position[v], p.position[t[0]], p.position[t[1]], p.position[t[2]],
-                             g) ||
-        !g.inside()) {
-      continue;
-    }
-    // Gradients s n for the vertex and -s b_k n for the triangle corners (b_k barycentric): the
-    // corrections are weighted by inverse mass and sum to zero momentum since sum b_k = 1.
-    const double w = wv + g.weight[0] * g.weight[0] * wt[0] + g.weight[1] * g.weight[1] * wt[1] +
-                     g.weight[2] * g.weight[2] * wt[2];
+    if (pair.side == 0.0) continue;
+    ContactGeometry g;
+    if (!geometry(pair, p.position, g) || !g.inside) continue;
+    const double w = inverseMass(pair, g, p);
     if (w == 0.0) continue;
     const double c = pair.side * g.distance - (thickness - pair.allowance);
-    if (c < 0.0) {
-      const Vec3 direction = pair.side * g.normal;
-      const double lambda = -c / w;
-      p.position[v] += (wv * lambda) * direction;
-      for (int k = 0; k < 3; ++k) p.position[t[k]] -= (wt[k] * g.weight[k] * lambda) * direction;
-      state.depth -= c;
-      state.normal = direction;
-      max_change = std::max(max_change, -c);
+    if (c < 0.0 || state.depth > 0.0) {
+      // At most h / 2 per pass: a contact found deep (a fast approach, or a tangle the solver did
+      // not prevent) is undone over several passes and substeps, the side frozen meanwhile,
+      // instead of flinging the cloth (full pushes fed the whipping of stiff cloth into tangles
+      // that grew without bound in the drape scene).
+      const double push = contactIncrement(std::max(c, -kMaxPush * thickness), state);
+      state.normal = pair.side * g.normal;
+      distribute(pair, g, w, push * state.normal, p);
+      max_change = std::max(max_change, std::abs(push));
     }
-    if (state.depth > 0.0) {
-      // Relative displacement of the vertex against the point of the triangle under it.
-      Vec3 relative = p.position[v] - p.substep_start[v];
-      for (int k = 0; k < 3; ++k) {
-        relative -= g.weight[k] * (p.position[t[k]] - p.substep_start[t[k]]);
+    if (state.frictionDepth() > 0.0) {
+      Vec3 relative = Vec3::Zero();
+      for (int k = 0; k < 4; ++k) {
+        const int i = pair.index[k];
+        relative += g.coefficient[k] * (p.position[i] - p.substep_start[i]);
       }
-      const Vec3 correction = frictionCorrection(relative, state, friction) / w;
-      p.position[v] += wv * correction;
-      for (int k = 0; k < 3; ++k) p.position[t[k]] -= (wt[k] * g.weight[k]) * correction;
+      distribute(pair, g, w, frictionCorrection(relative, state, friction), p);
     }
   }
   return max_change;
@@ -209,13 +315,10 @@ double SelfCollision::project(Particles& p, double thickness, int substep,
 
 double SelfCollision::maxPenetration(const Particles& p, double thickness) const {
   double depth = 0.0;
-  for (const VertexTrianglePair& pair : pairs_) {
-    const int v = pair.vertex, a = pair.triangle[0], b = pair.triangle[1], c = pair.triangle[2];
-    TriangleProjection g;
-    if (!projectOntoTriangle(p.position[v], p.position[a], p.position[b], p.position[c], g) ||
-        !g.inside()) {
-      continue;
-    }
+  for (const SelfContactPair& pair : pairs_) {
+    ContactGeometry g;
+    if (pair.side == 0.0 || !geometry(pair, p.position, g) || !g.inside) continue;
+    if (pair.edge_edge && std::abs(g.distance) > kEdgeBand * thickness) continue;  // not in touch
     depth = std::max(depth, thickness - pair.side * g.distance);
   }
   return depth;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace pbd_cloth {
 
@@ -40,6 +41,27 @@ Frame interpolateFrame(const Pose& a, const Pose& b, double s) {
       a.orientation.normalized().slerp(s, b.orientation.normalized()).toRotationMatrix();
   frame.translation = (1.0 - s) * a.position + s * b.position;
   return frame;
+}
+
+void worldBounds(const Shape& shape, const Frame& frame, Vec3& lo, Vec3& hi) {
+  Vec3 extent = Vec3::Zero();
+  switch (shape.type) {
+    case ShapeType::kPlane:
+      lo = Vec3::Constant(-std::numeric_limits<double>::infinity());
+      hi = Vec3::Constant(std::numeric_limits<double>::infinity());
+      return;
+    case ShapeType::kSphere:
+      extent = Vec3::Constant(shape.radius);
+      break;
+    case ShapeType::kCapsule:
+      extent = shape.half_length * frame.rotation.col(2).cwiseAbs() + Vec3::Constant(shape.radius);
+      break;
+    case ShapeType::kBox:
+      extent = frame.rotation.cwiseAbs() * shape.half_extents;
+      break;
+  }
+  lo = frame.translation - extent;
+  hi = frame.translation + extent;
 }
 
 double signedDistance(const Shape& shape, const Vec3& x, Vec3& normal) {
@@ -87,17 +109,20 @@ double signedDistance(const Shape& shape, const Vec3& x) {
   return signedDistance(shape, x, unused);
 }
 
-bool sweepSphere(const Shape& shape, const Vec3& a, const Vec3& b, double r, double& t) {
+bool sweepSphere(const Shape& shape, const Vec3& a, const Vec3& b, double r, double start_distance,
+                 const Vec3& start_normal, double& t, Vec3& normal) {
   const Vec3 direction = b - a;
   const double length = direction.norm();
   const double tolerance = kSweepTolerance * r;
   t = 0.0;
+  double clearance = start_distance - r;
+  normal = start_normal;
   for (int step = 0; step < kSweepMaxSteps; ++step) {
-    const double clearance = signedDistance(shape, a + t * direction) - r;
     if (clearance <= tolerance) return true;
     if (length == 0.0) return false;
     t += clearance / length;
     if (t > 1.0) return false;
+    clearance = signedDistance(shape, a + t * direction, normal) - r;
   }
   return false;
 }

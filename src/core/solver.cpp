@@ -174,16 +174,19 @@ double Solver::projectBend(double h, Particles& p, const ClothTopology& topology
     }
     bend_lambda_[c] += dlambda;
     const Vec3 direction = (dlambda * con.scale / b_norm) * b;
+    // |dx_k| = w_k |K_k| |direction|, and |direction| = |dlambda| scale: no square root per vertex.
+    double largest_weight = 0.0;
     for (int v = 0; v < 4; ++v) {
       const int i = con.index[v];
-      const Vec3 dx = (p.inverse_mass[i] * con.weight[v]) * direction;
-      max_change = std::max(max_change, dx.norm());
+      const double factor = p.inverse_mass[i] * con.weight[v];
+      largest_weight = std::max(largest_weight, std::abs(factor));
       if (jacobi) {
-        jacobi_delta_[i] += dx;
+        jacobi_delta_[i] += factor * direction;
       } else {
-        p.position[i] += dx;
+        p.position[i] += factor * direction;
       }
     }
+    max_change = std::max(max_change, largest_weight * std::abs(dlambda) * con.scale);
   }
   return max_change;
 }

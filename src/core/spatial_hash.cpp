@@ -21,13 +21,18 @@ int toCell(double v) {
 }  // namespace
 
 void SpatialHash::reserve(int items) {
-  // About two buckets per item keeps the buckets short.
+  // About two buckets per entry keeps the buckets short; a box typically covers a few cells, and
+  // the entry buffers hold 16 per item so that a step allocates nothing unless boxes grow long.
   std::size_t size = 64;
-  while (size < 2 * static_cast<std::size_t>(std::max(items, 1))) size *= 2;
+  while (size < 8 * static_cast<std::size_t>(std::max(items, 1))) size *= 2;
   mask_ = size - 1;
   bucket_start_.assign(size + 1, 0);
-  sorted_.reserve(items);
-  item_cell_.reserve(items);
+  entries_.reserve(16 * static_cast<std::size_t>(items));
+  unsorted_.reserve(16 * static_cast<std::size_t>(items));
+  lo_.reserve(items);
+  hi_.reserve(items);
+  lo_cell_.reserve(items);
+  overflow_.reserve(items);
 }
 
 SpatialHash::Cell SpatialHash::cellOf(const Vec3& x) const {
@@ -35,29 +40,41 @@ SpatialHash::Cell SpatialHash::cellOf(const Vec3& x) const {
               toCell(x.z() * inverse_cell_));
 }
 
-void SpatialHash::build(const Vec3Array& points, int count, double cell_size) {
-  if (bucket_start_.size() < 2 || 2 * static_cast<std::size_t>(count) > mask_ + 1) reserve(count);
+void SpatialHash::build(const Vec3Array& lo, const Vec3Array& hi, int count, double cell_size) {
+  if (bucket_start_.size() < 2 || 8 * static_cast<std::size_t>(count) > mask_ + 1) reserve(count);
   cell_size_ = cell_size;
   inverse_cell_ = 1.0 / cell_size;
-  item_cell_.resize(count);
-  sorted_.resize(count);
-  // Counting sort: count the items per bucket, prefix sums, then place them.
-  std::fill(bucket_start_.begin(), bucket_start_.end(), 0);
+  lo_.assign(lo.begin(), lo.begin() + count);
+  hi_.assign(hi.begin(), hi.begin() + count);
+  lo_cell_.resize(count);
+  unsorted_.clear();
+  overflow_.clear();
   for (int k = 0; k < count; ++k) {
-    item_cell_[k] = cellOf(points[k]);
-    ++bucket_start_[bucketOf(item_cell_[k]) + 1];
+    const Cell a = cellOf(lo[k]), b = cellOf(hi[k]);
+    lo_cell_[k] = a;
+    if (cellsSpanned(a, b) > kMaxCellsPerItem) {
+      overflow_.push_back(k);
+      continue;
+    }
+    for (int x = a.x(); x <= b.x(); ++x) {
+      for (int y = a.y(); y <= b.y(); ++y) {
+        for (int z = a.z(); z <= b.z(); ++z) unsorted_.push_back({k, Cell(x, y, z)});
+      }
+    }
   }
+  // Counting sort of the entries by bucket: count, prefix sums, then place from the back.
+  std::fill(bucket_start_.begin(), bucket_start_.end(), 0);
+  for (const Entry& entry : unsorted_) ++bucket_start_[bucketOf(entry.cell) + 1];
   for (std::size_t b = 1; b < bucket_start_.size(); ++b) bucket_start_[b] += bucket_start_[b - 1];
-  // Place from the back so each bucket keeps item order, using the starts as running ends.
-  for (int k = count - 1; k >= 0; --k) {
-    const std::size_t bucket = bucketOf(item_cell_[k]);
-    sorted_[--bucket_start_[bucket + 1]] = k;
+  entries_.resize(unsorted_.size());
+  for (std::size_t e = unsorted_.size(); e-- > 0;) {
+    entries_[--bucket_start_[bucketOf(unsorted_[e].cell) + 1]] = unsorted_[e];
   }
   // Placing decremented every end down to its start: bucket_start_[b + 1] now holds the start of
   // bucket b. Shift left to restore start(b) = bucket_start_[b], end(b) = bucket_start_[b + 1].
   const std::size_t size = bucket_start_.size() - 1;
   for (std::size_t b = 0; b < size; ++b) bucket_start_[b] = bucket_start_[b + 1];
-  bucket_start_[size] = count;
+  bucket_start_[size] = static_cast<int>(entries_.size());
 }
 
 }  // namespace pbd_cloth

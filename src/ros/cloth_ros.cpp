@@ -1,5 +1,10 @@
 #include "pbd_cloth/ros/cloth_ros.h"
 
+#include <algorithm>
+#include <cctype>
+#include <sstream>
+
+#include <geometry_msgs/WrenchStamped.h>
 #include <visualization_msgs/MarkerArray.h>
 #include <boost/make_shared.hpp>
 
@@ -9,14 +14,42 @@
 #include "pbd_cloth/ros/ros_params.h"
 
 namespace pbd_cloth {
+namespace {
+
+// ~grasp_by_name values, case-insensitive.
+bool parseGrasp(std::string value, bool& grasp) {
+  std::transform(value.begin(), value.end(), value.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
+  if (value == "true" || value == "1" || value == "grasp") {
+    grasp = true;
+    return true;
+  }
+  if (value == "false" || value == "0" || value == "release") {
+    grasp = false;
+    return true;
+  }
+  return false;
+}
+
+// A grasp that found nothing to hold is a valid request answered with success = false, so it is
+// logged as a warning but not counted as a rejected input.
+void logGrasp(const std::string& gripper, const GraspResult& result) {
+  if (result.success) {
+    ROS_INFO("Gripper '%s': %s", gripper.c_str(), result.message.c_str());
+  } else {
+    ROS_WARN("Gripper '%s': %s", gripper.c_str(), result.message.c_str());
+  }
+}
+
+}  // namespace
 
 ClothRos::ClothRos(ros::NodeHandle nh, ros::NodeHandle nh_private)
     : nh_(nh), nh_private_(nh_private) {
   try {
     sim_ = std::make_unique<Simulation>(readSceneParameters(nh_private_));
+    config_ = readNodeParameters(nh_private_);
   } catch (const ConfigError& error) {
-    ROS_FATAL("Invalid scene parameter in %s: %s", nh_private_.getNamespace().c_str(),
-              error.what());
+    ROS_FATAL("Invalid parameter in %s: %s", nh_private_.getNamespace().c_str(), error.what());
     throw;
   }
   const SceneConfig& scene = sim_->scene();
@@ -27,24 +60,171 @@ ClothRos::ClothRos(ros::NodeHandle nh, ros::NodeHandle nh_private)
       sim_->topology().triangleCount(), toString(scene.solver.method), scene.solver.substeps,
       scene.step_rate, scene.publish_rate, scene.frame_id.c_str());
 
+  tf_listener_ = std::make_unique<tf2_ros::TransformListener>(tf_buffer_, nh_);
+  pose_transformer_ = std::make_unique<PoseTransformer>(
+      tf_buffer_, PoseTransformer::Config{scene.frame_id, config_.tf_timeout});
+
   state_pub_ = nh_private_.advertise<ClothState>("state", 1);
   markers_pub_ = nh_private_.advertise<visualization_msgs::MarkerArray>("markers", 1);
   reset_service_ = nh_private_.advertiseService("reset", &ClothRos::resetCallback, this);
+  // A std_msgs-only way to grasp by name, so a grasp on a gripper the scene does not have reaches
+  // the node (a missing ~<name>/grasp service cannot be called) and is counted as rejected.
+  grasp_by_name_sub_ =
+      nh_private_.subscribe("grasp_by_name", 10, &ClothRos::graspByNameCallback, this);
+  createBodies();
+
+  reconfigure_ =
+      std::make_unique<SolverReconfigure>(nh_private_, tuningFromSimulation(*sim_),
+                                          [this](const SolverTuning& requested, unsigned groups) {
+                                            return reconfigure(requested, groups);
+                                          });
+  diagnostics_ = std::make_unique<ClothDiagnostics>(nh_, nh_private_, nh_private_.getNamespace(),
+                                                    config_.diagnostics);
 
   // roscpp never queues missed timer ticks: when a step overruns its period the next one simply
-  // starts later, so the simulation slows down instead of trying to catch up.
+  // starts later, and each step advances the simulation by the same 1/step_rate, so the simulation
+  // slows down (real-time factor < 1, reported in ~state and the diagnostics) instead of trying to
+  // catch up.
   step_timer_ =
       nh_.createWallTimer(ros::WallDuration(1.0 / scene.step_rate), &ClothRos::stepCallback, this);
   publish_timer_ = nh_.createWallTimer(ros::WallDuration(1.0 / scene.publish_rate),
                                        &ClothRos::publishCallback, this);
+  diagnostics_timer_ = nh_.createWallTimer(ros::WallDuration(diagnostics_->period()),
+                                           &ClothRos::diagnosticsCallback, this);
+  input_spinner_ = std::make_unique<ros::AsyncSpinner>(1, &input_queue_);
+  input_spinner_->start();
+}
+
+ClothRos::~ClothRos() {
+  // Before any member goes: a pose callback in flight uses the simulation and the tf buffer.
+  input_spinner_->stop();
+}
+
+void ClothRos::createBodies() {
+  ros::NodeHandle input_nh(nh_private_);
+  input_nh.setCallbackQueue(&input_queue_);
+  bodies_.resize(sim_->gripperCount() + sim_->obstacleCount());
+  for (std::size_t k = 0; k < bodies_.size(); ++k) {
+    Body& body = bodies_[k];
+    body.is_gripper = static_cast<int>(k) < sim_->gripperCount();
+    body.index = body.is_gripper ? static_cast<int>(k) : static_cast<int>(k) - sim_->gripperCount();
+    body.name = body.is_gripper ? sim_->gripperName(body.index) : sim_->obstacle(body.index).name;
+    body.follower = PoseFollower(config_.follower);
+    body.pose_topic = nh_private_.resolveName(body.name + "/pose");
+    if (body.is_gripper) {
+      body.tf_frame = sim_->scene().grippers[body.index].tf_frame;
+      body.grasp_service =
+          nh_private_.advertiseService<std_srvs::SetBool::Request, std_srvs::SetBool::Response>(
+              body.name + "/grasp", [this, &body](std_srvs::SetBool::Request& request,
+                                                  std_srvs::SetBool::Response& response) {
+                return graspCallback(body, request, response);
+              });
+      body.wrench_publisher =
+          nh_private_.advertise<geometry_msgs::WrenchStamped>(body.name + "/wrench", 1);
+    }
+    if (!body.tf_frame.empty()) {
+      // One source per gripper: a pose topic beside a followed frame would fight over it.
+      ROS_INFO("Gripper '%s' follows tf frame '%s' (%s is not subscribed).", body.name.c_str(),
+               body.tf_frame.c_str(), body.pose_topic.c_str());
+      continue;
+    }
+    // Every message is kept (up to 10) rather than only the latest, so each one is checked: an
+    // out-of-order message is counted as such instead of silently replacing a newer one.
+    body.pose_subscriber = input_nh.subscribe<geometry_msgs::PoseStamped>(
+        body.name + "/pose", 10,
+        [this, &body](const geometry_msgs::PoseStampedConstPtr& msg) { poseCallback(body, *msg); });
+  }
+}
+
+Pose ClothRos::currentPose(const Body& body) const {
+  return body.is_gripper ? sim_->gripperPose(body.index) : sim_->obstacle(body.index).pose;
+}
+
+void ClothRos::poseCallback(Body& body, const geometry_msgs::PoseStamped& msg) {
+  const ros::Time stamp = msg.header.stamp;
+  // Order first: an old message is refused before it waits for tf. Stamp 0 ("now", as
+  // `rostopic pub` sends it) takes no part in the ordering.
+  if (!stamp.isZero()) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (stamp < body.last_stamp) {
+      std::ostringstream detail;
+      detail << "stamp " << stamp << " is before the last accepted " << body.last_stamp;
+      rejections_.reject(body.pose_topic, RejectReason::kOutOfOrder, detail.str());
+      return;
+    }
+  }
+  Pose pose;
+  PoseTransformer::Failure failure;
+  // Outside the lock: this may wait up to tf_timeout while the simulation steps on.
+  if (!pose_transformer_->toSceneFrame(msg, pose, failure)) {
+    rejections_.reject(body.pose_topic, failure.reason, failure.detail);
+    return;
+  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!stamp.isZero()) {
+    body.last_stamp = stamp;
+  }
+  body.follower.addSample(currentPose(body), pose, ros::WallTime::now().toSec());
+}
+
+// Grippers that follow a tf frame take its latest transform every step; each new stamp is a sample
+// for the follower, exactly like a pose message.
+void ClothRos::pollTfFrames() {
+  for (Body& body : bodies_) {
+    if (body.tf_frame.empty()) {
+      continue;
+    }
+    Pose pose;
+    ros::Time stamp;
+    PoseTransformer::Failure failure;
+    if (!pose_transformer_->lookupFrame(body.tf_frame, pose, stamp, failure)) {
+      if (body.tf_seen && body.tf_ok) {
+        // Counted once per outage, not once per step of it.
+        rejections_.reject("tf frame '" + body.tf_frame + "' (gripper " + body.name + ")",
+                           failure.reason, failure.detail);
+      } else if (!body.tf_seen) {
+        // Not yet a rejected input: the broadcaster may simply start after this node.
+        ROS_WARN_THROTTLE(10.0, "Waiting for tf frame '%s' for gripper '%s': %s",
+                          body.tf_frame.c_str(), body.name.c_str(), failure.detail.c_str());
+      }
+      body.tf_ok = false;
+      continue;
+    }
+    body.tf_seen = body.tf_ok = true;
+    // A static frame keeps stamp 0: it becomes a sample once, then the gripper stays there.
+    if (!body.follower.active() || stamp != body.last_stamp) {
+      body.last_stamp = stamp;
+      body.follower.addSample(currentPose(body), pose, ros::WallTime::now().toSec());
+    }
+  }
+}
+
+// Bodies that have received a pose are moved to where their follower puts them at the end of the
+// step; the core interpolates that motion across the substeps. Bodies that never received one keep
+// their scripted trajectory (grippers) or their scene pose (obstacles).
+void ClothRos::driveBodies(double step_end) {
+  for (const Body& body : bodies_) {
+    if (!body.follower.active()) {
+      continue;
+    }
+    const Pose pose = body.follower.poseAt(step_end);
+    if (body.is_gripper) {
+      sim_->setGripperPose(body.index, pose);
+    } else {
+      sim_->setObstaclePose(body.index, pose);
+    }
+  }
 }
 
 void ClothRos::stepCallback(const ros::WallTimerEvent& /*event*/) {
   std::lock_guard<std::mutex> lock(mutex_);
+  const double period = 1.0 / sim_->scene().step_rate;
+  pollTfFrames();
+  driveBodies(ros::WallTime::now().toSec() + period);
   sim_->step();
   real_time_factor_.add(ros::WallTime::now().toSec(), sim_->time());
+  diagnostics_->addStep(sim_->stats().step_wall_time);
 
-  const double period = 1.0 / sim_->scene().step_rate;
   if (sim_->stats().step_wall_time > period) {
     ROS_WARN_THROTTLE(10.0,
                       "A step takes %.1f ms, longer than its period of %.1f ms: the simulation "
@@ -57,23 +237,103 @@ void ClothRos::stepCallback(const ros::WallTimerEvent& /*event*/) {
 void ClothRos::publishCallback(const ros::WallTimerEvent& /*event*/) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (!allFinite(sim_->particles())) {
-    ROS_ERROR_THROTTLE(5.0, "The simulation diverged (non-finite positions); call %s to restart.",
+    // Publishing would hand NaNs to every consumer; the diagnostics report the error too.
+    ROS_ERROR_THROTTLE(5.0,
+                       "The simulation diverged (non-finite positions); nothing is published "
+                       "until %s restarts it.",
                        reset_service_.getService().c_str());
+    return;
   }
   publishState();
   publishMarkers();
+  publishWrenches();
+}
+
+void ClothRos::diagnosticsCallback(const ros::WallTimerEvent& /*event*/) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  // The figures ~state reports, read the same way.
+  SolverStats stats;
+  RosConversions::toStatsMessage(*sim_, stats);
+  SimulationHealth health;
+  health.sim_time = stats.sim_time;
+  health.step_period = 1.0 / sim_->scene().step_rate;
+  health.real_time_factor = real_time_factor_.value();
+  // Half a window: enough wall time that one late timer tick does not decide the verdict.
+  health.real_time_factor_valid = real_time_factor_.span() >= 0.5;
+  health.substeps = static_cast<int>(stats.substeps);
+  health.iterations = static_cast<int>(stats.iterations);
+  health.max_strain = stats.max_strain;
+  health.max_penetration = stats.max_penetration;
+  health.finite = allFinite(sim_->particles());
+  diagnostics_->report(health, rejections_);
 }
 
 bool ClothRos::resetCallback(std_srvs::Trigger::Request& /*request*/,
                              std_srvs::Trigger::Response& response) {
   std::lock_guard<std::mutex> lock(mutex_);
   sim_->reset();
+  // Grippers and obstacles are back at their scene poses: the next pose (or tf stamp) starts
+  // afresh from there, and a replayed stream with earlier stamps is not out of order.
+  for (Body& body : bodies_) {
+    body.follower.reset();
+    body.last_stamp = ros::Time();
+  }
   real_time_factor_.clear();  // simulated time jumps back: old samples would give a negative rate
   // Publish the initial state at once, so a client sees it before the next step moves it.
   publishState();
   response.success = true;
   response.message = "back to the initial state";
   return true;
+}
+
+bool ClothRos::graspCallback(const Body& body, std_srvs::SetBool::Request& request,
+                             std_srvs::SetBool::Response& response) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const GraspResult result = sim_->setGrasp(body.index, request.data);
+  response.success = result.success;
+  response.message = result.message;
+  logGrasp(body.name, result);
+  return true;
+}
+
+void ClothRos::graspByNameCallback(const diagnostic_msgs::KeyValue& msg) {
+  const std::string topic = grasp_by_name_sub_.getTopic();
+  std::lock_guard<std::mutex> lock(mutex_);
+  const int gripper = sim_->gripperIndex(msg.key);
+  if (gripper < 0) {
+    std::string names;
+    for (int g = 0; g < sim_->gripperCount(); ++g) {
+      names += (g > 0 ? ", " : "") + sim_->gripperName(g);
+    }
+    rejections_.reject(topic, RejectReason::kUnknownGripper,
+                       "no gripper '" + msg.key +
+                           "' in the scene (grippers: " + (names.empty() ? "none" : names) + ")");
+    return;
+  }
+  bool grasp = false;
+  if (!parseGrasp(msg.value, grasp)) {
+    rejections_.reject(topic, RejectReason::kBadValue,
+                       "value '" + msg.value + "' is not true/false (1/0, grasp/release)");
+    return;
+  }
+  logGrasp(msg.key, sim_->setGrasp(gripper, grasp));
+}
+
+SolverTuning ClothRos::reconfigure(const SolverTuning& requested, unsigned groups) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::string errors;
+  if (!applyTuning(requested, groups, *sim_, errors)) {
+    rejections_.reject(nh_private_.resolveName("set_parameters"), RejectReason::kBadValue,
+                       errors + " (the previous value stays)");
+  }
+  const SolverTuning now = tuningFromSimulation(*sim_);
+  ROS_INFO(
+      "Solver tuning from the next step: %d substeps, %d iterations, tolerance %g m, %s, "
+      "relaxation %g, damping %g 1/s, compliance stretch %g bend %g, friction %g/%g.",
+      now.substeps, now.iterations, now.tolerance, now.ordering == 1 ? "jacobi" : "gauss_seidel",
+      now.relaxation, now.damping, now.stretch_compliance, now.bend_compliance, now.friction_static,
+      now.friction_kinetic);
+  return now;
 }
 
 void ClothRos::publishState() {
@@ -86,7 +346,7 @@ void ClothRos::publishState() {
   msg->header.stamp = ros::Time::now();
   RosConversions::toStateMessage(*sim_, *msg);
   msg->stats.real_time_factor = real_time_factor_.value();
-  msg->stats.rejected_inputs = rejected_inputs_;
+  msg->stats.rejected_inputs = rejections_.total();
   state_pub_.publish(msg);
 }
 
@@ -101,6 +361,21 @@ void ClothRos::publishMarkers() {
   const auto msg = boost::make_shared<visualization_msgs::MarkerArray>();
   RosConversions::toMarkerArray(*sim_, header, *msg);
   markers_pub_.publish(msg);
+}
+
+void ClothRos::publishWrenches() {
+  for (const Body& body : bodies_) {
+    if (!body.is_gripper || body.wrench_publisher.getNumSubscribers() == 0) {
+      continue;
+    }
+    const auto msg = boost::make_shared<geometry_msgs::WrenchStamped>();
+    msg->header.frame_id = sim_->scene().frame_id;
+    msg->header.stamp = ros::Time::now();
+    // The force the grasped particles' constraints pull on the gripper, in the scene frame. The
+    // core reports no torque, so it stays zero.
+    msg->wrench.force = RosConversions::toVector3(sim_->gripperForce(body.index));
+    body.wrench_publisher.publish(msg);
+  }
 }
 
 }  // namespace pbd_cloth

@@ -11,10 +11,7 @@ void RealTimeFactor::add(double wall_time, double sim_time) {
 }
 
 double RealTimeFactor::value() const {
-  if (samples_.size() < 2) {
-    return 0.0;
-  }
-  const double wall = samples_.back().first - samples_.front().first;
+  const double wall = span();
   if (wall <= 0.0) {
     return 0.0;
   }

@@ -1,15 +1,41 @@
 #include "pbd_cloth/ros/ros_conversions.h"
 
+#include "pbd_cloth/cloth_builder.h"
+#include "pbd_cloth/shapes.h"
+
 namespace pbd_cloth {
 namespace {
 
-std_msgs::ColorRGBA color(float r, float g, float b) {
+// Alpha < 1 turns off depth writes in rviz and a mesh looks inside out: 1 unless see-through is
+// the point (the gripper spheres around their grasped particles).
+std_msgs::ColorRGBA color(float r, float g, float b, float a = 1.0f) {
   std_msgs::ColorRGBA c;
   c.r = r;
   c.g = g;
   c.b = b;
-  c.a = 1.0f;  // alpha < 1 turns off depth writes in rviz and the mesh looks inside out
+  c.a = a;
   return c;
+}
+
+// Edge length of the square drawn for an (infinite) plane obstacle (m).
+constexpr double kPlaneMarkerSize = 4.0;
+// Thickness of that square (m): thin, but thick enough not to flicker against the cloth on it.
+constexpr double kPlaneMarkerThickness = 0.002;
+
+// Centre of the cloth grid as built (before it moves), where a plane's square is centred.
+Vec3 initialClothCentre(const ClothConfig& cloth) {
+  const Vec3 half_grid(0.5 * (cloth.cols - 1) * cloth.spacing,
+                       -0.5 * (cloth.rows - 1) * cloth.spacing, 0.0);
+  return cloth.origin + rotationFromRpy(cloth.rpy) * half_grid;
+}
+
+// `local` (in the obstacle's frame) placed by the obstacle's pose.
+geometry_msgs::Pose placed(const Pose& obstacle_pose, const Vec3& local_position,
+                           const Eigen::Quaterniond& local_orientation) {
+  Pose pose;
+  pose.position = obstacle_pose.position + obstacle_pose.orientation * local_position;
+  pose.orientation = obstacle_pose.orientation * local_orientation;
+  return RosConversions::toPoseMessage(pose);
 }
 
 // Fields every marker of this node shares.
@@ -142,6 +168,72 @@ void RosConversions::toParticleMarkers(const Simulation& sim, const std_msgs::He
   markers.markers.push_back(granular);
 }
 
+void RosConversions::toObstacleMarkers(const Simulation& sim, const std_msgs::Header& header,
+                                       visualization_msgs::MarkerArray& markers) {
+  using visualization_msgs::Marker;
+  const std_msgs::ColorRGBA solid = color(0.45f, 0.5f, 0.6f);
+  const std_msgs::ColorRGBA ground = color(0.35f, 0.35f, 0.4f);
+  const Eigen::Quaterniond identity = Eigen::Quaterniond::Identity();
+  for (int k = 0; k < sim.obstacleCount(); ++k) {
+    const ObstacleConfig& obstacle = sim.obstacle(k);
+    // The core's own local shape: the plane normal comes normalised together with its offset.
+    const Shape shape = makeShape(obstacle);
+    const auto add = [&](int part, int type, const Vec3& local_position,
+                         const Eigen::Quaterniond& local_orientation, const Vec3& scale) {
+      Marker marker;
+      initMarker(header, "obstacles", 3 * k + part, type, marker);
+      marker.pose = placed(obstacle.pose, local_position, local_orientation);
+      marker.scale.x = scale.x();
+      marker.scale.y = scale.y();
+      marker.scale.z = scale.z();
+      marker.color = shape.type == ShapeType::kPlane ? ground : solid;
+      markers.markers.push_back(marker);
+    };
+    switch (shape.type) {
+      case ShapeType::kSphere:
+        add(0, Marker::SPHERE, Vec3::Zero(), identity, Vec3::Constant(2.0 * shape.radius));
+        break;
+      case ShapeType::kBox:
+        add(0, Marker::CUBE, Vec3::Zero(), identity, 2.0 * shape.half_extents);
+        break;
+      case ShapeType::kCapsule: {
+        // rviz's CYLINDER runs along its local z, like the capsule's segment.
+        const double diameter = 2.0 * shape.radius;
+        add(0, Marker::CYLINDER, Vec3::Zero(), identity,
+            Vec3(diameter, diameter, 2.0 * shape.half_length));
+        add(1, Marker::SPHERE, Vec3(0.0, 0.0, shape.half_length), identity,
+            Vec3::Constant(diameter));
+        add(2, Marker::SPHERE, Vec3(0.0, 0.0, -shape.half_length), identity,
+            Vec3::Constant(diameter));
+        break;
+      }
+      case ShapeType::kPlane: {
+        // A square below the cloth's starting place, its top face on the plane.
+        const Vec3 centre = obstacle.pose.orientation.conjugate() *
+                            (initialClothCentre(sim.scene().cloth) - obstacle.pose.position);
+        const Vec3 on_plane = centre - (shape.normal.dot(centre) - shape.offset) * shape.normal;
+        add(0, Marker::CUBE, on_plane - 0.5 * kPlaneMarkerThickness * shape.normal,
+            Eigen::Quaterniond::FromTwoVectors(Vec3::UnitZ(), shape.normal),
+            Vec3(kPlaneMarkerSize, kPlaneMarkerSize, kPlaneMarkerThickness));
+        break;
+      }
+    }
+  }
+}
+
+void RosConversions::toGripperMarkers(const Simulation& sim, const std_msgs::Header& header,
+                                      visualization_msgs::MarkerArray& markers) {
+  for (int g = 0; g < sim.gripperCount(); ++g) {
+    visualization_msgs::Marker marker;
+    initMarker(header, "grippers", g, visualization_msgs::Marker::SPHERE, marker);
+    marker.pose = toPoseMessage(sim.gripperPose(g));
+    marker.scale.x = marker.scale.y = marker.scale.z = 2.0 * sim.scene().grippers[g].radius;
+    marker.color =
+        sim.gripperGrasping(g) ? color(0.2f, 0.8f, 0.2f, 0.5f) : color(0.95f, 0.85f, 0.2f, 0.5f);
+    markers.markers.push_back(marker);
+  }
+}
+
 void RosConversions::toMarkerArray(const Simulation& sim, const std_msgs::Header& header,
                                    visualization_msgs::MarkerArray& markers) {
   markers.markers.clear();
@@ -150,6 +242,8 @@ void RosConversions::toMarkerArray(const Simulation& sim, const std_msgs::Header
     markers.markers.push_back(mesh);
   }
   toParticleMarkers(sim, header, markers);
+  toObstacleMarkers(sim, header, markers);
+  toGripperMarkers(sim, header, markers);
 }
 
 }  // namespace pbd_cloth

@@ -1,5 +1,8 @@
 #include "pbd_cloth/ros/ros_params.h"
 
+#include <cmath>
+#include <sstream>
+
 #include <ros/console.h>
 
 #include "pbd_cloth/scene_yaml.h"
@@ -65,6 +68,28 @@ SceneConfig readSceneParameters(const ros::NodeHandle& nh_private) {
         nh_private.getNamespace().c_str());
   }
   return sceneFromYaml(root);
+}
+
+ClothRos::Config readNodeParameters(const ros::NodeHandle& nh_private) {
+  ClothRos::Config config;
+  // `low` is allowed when `low_allowed`; every value must be finite.
+  const auto read = [&nh_private](const std::string& key, double& value, double low,
+                                  bool low_allowed) {
+    if (!nh_private.getParam(key, value)) {
+      return;
+    }
+    if (!std::isfinite(value) || value < low || (!low_allowed && value == low)) {
+      std::ostringstream message;
+      message << "must be a finite number " << (low_allowed ? ">= " : "> ") << low << ", got "
+              << value;
+      throw ConfigError(key, message.str());
+    }
+  };
+  read("tf_timeout", config.tf_timeout, 0.0, true);
+  read("pose_period", config.follower.default_period, 0.0, false);
+  read("max_pose_period", config.follower.max_period, 0.0, false);
+  read("min_real_time_factor", config.diagnostics.min_real_time_factor, 0.0, true);
+  return config;
 }
 
 }  // namespace pbd_cloth

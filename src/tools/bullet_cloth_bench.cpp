@@ -39,25 +39,26 @@ const char kUsage[] =
     "structural then shear, in the same order; pinned particles get mass 0) in a\n"
     "btSoftRigidDynamicsWorld with the scene's gravity and static obstacles, runs\n"
     "round(duration * step_rate) steps of 1/step_rate s and prints the key=value line of\n"
-    "cloth_bench (wall_ms_per_step max_strain mean_strain max_penetration self_intersections energy\n"
-    "finite steps ... method=bullet), the metrics computed by pbd_cloth's own functions on the same\n"
-    "stretch links. Only the Bullet step calls are timed. max_strain, max_penetration and\n"
-    "max_self_intersections are maxima over the samples (every step for <= 5000 particles, every\n"
-    "10th otherwise, and the last step); the other metrics are those of the final state.\n"
+    "cloth_bench (wall_ms_per_step max_strain mean_strain max_penetration self_intersections\n"
+    "energy finite steps ... method=bullet), the metrics computed by pbd_cloth's own functions on\n"
+    "the same stretch links. Only the Bullet step calls are timed. max_strain, max_penetration\n"
+    "and max_self_intersections are maxima over the samples (every step for <= 5000 particles,\n"
+    "every 10th otherwise, and the last step); the other metrics are those of the final state.\n"
     "\n"
     "Options (as cloth_bench):\n"
     "  --config <file>        scene YAML (the format of config/hanging.yaml)\n"
     "  --duration <s>         simulated time, >= 0\n"
     "  --set <key=value>      override a scene key (solver.substeps=20) or a Bullet knob:\n"
-    "      bullet.substeps=N      internal steps per step, h = dt/N  (default: solver.substeps)\n"
-    "      bullet.piterations=N   position solver passes per internal step (default:\n"
-    "                             solver.iterations)\n"
+    "      bullet.substeps=N      internal steps per step, h = dt/N (default: solver.substeps)\n"
+    "      bullet.piterations=N   position solver passes per internal step\n"
+    "                             (default: solver.iterations)\n"
     "      bullet.viterations=N   velocity solver passes (default 0, Bullet's default)\n"
     "      bullet.diterations=N   drift solver passes (default 0, Bullet's default)\n"
     "      bullet.kLST=x          link stiffness in (0, 1] (default 1: inextensible)\n"
-    "      bullet.kDP=x           damping per internal step in [0, 1) (default: solver.damping * h,\n"
-    "                             the damping of the pbd_cloth solver)\n"
-    "      bullet.bending=0|1     Bullet's bending links (generateBendingConstraints(2)) (default 0)\n"
+    "      bullet.kDP=x           damping per internal step in [0, 1)\n"
+    "                             (default: solver.damping * h, as the pbd_cloth solver damps)\n"
+    "      bullet.bending=0|1     Bullet's bending links, generateBendingConstraints(2)\n"
+    "                             (default 0)\n"
     "      bullet.bend_kLST=x     stiffness of those links (default 0.5)\n"
     "  --csv <file>           t,max_strain,mean_strain,energy,max_penetration per metric sample\n"
     "  --sample-every <n>     sample the metrics every n steps\n"
@@ -65,8 +66,10 @@ const char kUsage[] =
     "  --mesh <file.obj>      final cloth as a Wavefront OBJ\n"
     "  --quiet                no progress message on stderr\n"
     "  --help                 this text\n"
-    "Bullet is built in single precision (Debian's libbullet-dev); grippers and the bounds box are\n"
-    "not simulated (a warning says so), cloth self-collision is off (Bullet needs clusters for it).\n";
+    "Bullet is built in single precision (Debian's libbullet-dev). Grippers, granular particles\n"
+    "and the bounds box are not simulated (a warning says so); cloth self-collision is off\n"
+    "(Bullet needs clusters for it). A diverged cloth (max strain > 10) reports\n"
+    "self_intersections=-1: not counted.\n";
 
 constexpr int kLargeScene = 5000;  // particles; above it the metrics are sampled every 10th step
 constexpr double kDivergedStrain = 10.0;  // above it self-intersections are not counted
@@ -254,10 +257,9 @@ class BulletCloth {
         broadphase_(new btDbvtBroadphase()),
         constraint_solver_(new btSequentialImpulseConstraintSolver()),
         soft_body_solver_(new btDefaultSoftBodySolver()),
-        world_(new btSoftRigidDynamicsWorld(dispatcher_.get(), broadphase_.get(),
-                                            constraint_solver_.get(),
-                                            collision_configuration_.get(),
-                                            soft_body_solver_.get())) {
+        world_(new btSoftRigidDynamicsWorld(
+            dispatcher_.get(), broadphase_.get(), constraint_solver_.get(),
+            collision_configuration_.get(), soft_body_solver_.get())) {
     const btVector3 gravity = toBullet(scene.solver.gravity);
     world_->setGravity(gravity);
     btSoftBodyWorldInfo& info = world_->getWorldInfo();
@@ -298,9 +300,8 @@ class BulletCloth {
     cfg.viterations = knobs.viterations;
     cfg.diterations = knobs.diterations;
     // Bullet scales velocities by (1 - kDP) once per internal step; pbd_cloth by (1 - damping h).
-    cfg.kDP = static_cast<btScalar>(knobs.damping >= 0.0
-                                        ? knobs.damping
-                                        : std::min(0.99, scene.solver.damping * h));
+    cfg.kDP = static_cast<btScalar>(
+        knobs.damping >= 0.0 ? knobs.damping : std::min(0.99, scene.solver.damping * h));
     cfg.kDF = static_cast<btScalar>(scene.cloth.friction.kinetic_coefficient);
     body_->getCollisionShape()->setMargin(static_cast<btScalar>(scene.cloth.thickness));
     world_->addSoftBody(body_);
@@ -355,9 +356,8 @@ class BulletCloth {
           break;
         case pbd_cloth::ShapeType::kPlane: {
           const Eigen::Vector3d normal = obstacle.normal.normalized();
-          shape = new btStaticPlaneShape(toBullet(normal),
-                                         static_cast<btScalar>(obstacle.offset /
-                                                               obstacle.normal.norm()));
+          shape = new btStaticPlaneShape(
+              toBullet(normal), static_cast<btScalar>(obstacle.offset / obstacle.normal.norm()));
           pose.setIdentity();
           break;
         }
@@ -391,10 +391,9 @@ pbd_cloth::Metrics computeMetrics(const pbd_cloth::SceneConfig& scene,
   metrics.finite = pbd_cloth::allFinite(particles);
   // A diverged cloth (links ten times their length) puts every triangle in one grid cell of the
   // intersection count, which then takes minutes and means nothing: -1 = not counted.
-  metrics.self_intersections =
-      metrics.finite && metrics.max_strain < kDivergedStrain
-          ? pbd_cloth::countSelfIntersections(particles, topology)
-          : -1;
+  metrics.self_intersections = metrics.finite && metrics.max_strain < kDivergedStrain
+                                   ? pbd_cloth::countSelfIntersections(particles, topology)
+                                   : -1;
   const Eigen::Vector3d& g = scene.solver.gravity;
   for (int i = 0; i < particles.size(); ++i) {
     if (particles.isKinematic(i)) continue;
@@ -448,10 +447,10 @@ int run(const Options& options) {
   collisions.prepare(particles, topology);
   BulletCloth cloth(scene, particles, topology, options.bullet);
 
-  const int substeps = options.bullet.substeps > 0 ? options.bullet.substeps
-                                                   : scene.solver.substeps;
-  const int piterations = options.bullet.piterations > 0 ? options.bullet.piterations
-                                                         : scene.solver.iterations;
+  const int substeps =
+      options.bullet.substeps > 0 ? options.bullet.substeps : scene.solver.substeps;
+  const int piterations =
+      options.bullet.piterations > 0 ? options.bullet.piterations : scene.solver.iterations;
   const double dt = 1.0 / scene.step_rate;
   const btScalar h = static_cast<btScalar>(dt / substeps);
   const double step_count = options.duration * scene.step_rate;
@@ -500,8 +499,8 @@ int run(const Options& options) {
     }
   }
   if (mesh.is_open()) {
-    mesh << "# bullet_cloth_bench " << topology.rows << " x " << topology.cols << " cloth at t = "
-         << done * dt << " s\n";
+    mesh << "# bullet_cloth_bench " << topology.rows << " x " << topology.cols
+         << " cloth at t = " << done * dt << " s\n";
     for (int i = 0; i < particles.cloth_count; ++i) {
       const pbd_cloth::Vec3& x = particles.position[i];
       mesh << "v " << x.x() << ' ' << x.y() << ' ' << x.z() << '\n';

@@ -42,6 +42,12 @@ const char kUsage[] =
     "  --sample-every <n>     sample the metrics every n steps instead (n >= 1)\n"
     "  --positions <file>     write the final positions as index,x,y,z lines (no header)\n"
     "  --mesh <file.obj>      write the final cloth as a Wavefront OBJ (v and 1-based f lines)\n"
+    "  --target-max-strain <e>  instead of one run, search substeps x iterations (iterations\n"
+    "                         1, 2, 4, 8; substeps by doubling then bisection up to\n"
+    "                         --max-substeps, default 256) for the cheapest measured setting whose\n"
+    "                         max_strain over the run is <= e; prints it with its cost and a YAML\n"
+    "                         snippet to paste (exit 3 when no setting meets it)\n"
+    "  --target-mean-strain <e>  the same for the final mean_strain\n"
     "  --quiet                no progress message on stderr; the result line is still printed\n"
     "  --help                 this text\n";
 
@@ -61,6 +67,9 @@ struct Options {
   std::string mesh;
   int sample_every = 0;  // 0: by scene size
   bool quiet = false;
+  double target_max_strain = 0.0;   // > 0: search the cheapest setting instead of one run
+  double target_mean_strain = 0.0;
+  int max_substeps = 256;           // upper end of the search
 };
 
 double parseNumber(const std::string& option, const std::string& text) {
@@ -117,6 +126,19 @@ Options parseArguments(int argc, char** argv) {
       options.positions = next();
     } else if (option == "--mesh") {
       options.mesh = next();
+    } else if (option == "--target-max-strain" || option == "--target-mean-strain") {
+      const double target = parseNumber(option, next());
+      if (!(target > 0.0 && std::isfinite(target))) {
+        throw UsageError(option + ": must be a strain > 0, e.g. 0.01");
+      }
+      (option == "--target-max-strain" ? options.target_max_strain : options.target_mean_strain) =
+          target;
+    } else if (option == "--max-substeps") {
+      const double n = parseNumber(option, next());
+      if (!(n >= 1.0 && n <= 100000 && n == std::floor(n))) {
+        throw UsageError("--max-substeps: must be an integer in [1, 100000]");
+      }
+      options.max_substeps = static_cast<int>(n);
     } else if (option == "--sample-every") {
       const double n = parseNumber(option, next());
       if (!(n >= 1.0 && n <= 1e9 && n == std::floor(n))) {
@@ -129,6 +151,9 @@ Options parseArguments(int argc, char** argv) {
   }
   if (options.config.empty()) throw UsageError("--config <scene.yaml> is required");
   if (options.duration < 0.0) throw UsageError("--duration <s> is required");
+  if (options.target_max_strain > 0.0 && options.target_mean_strain > 0.0) {
+    throw UsageError("give --target-max-strain or --target-mean-strain, not both");
+  }
   return options;
 }
 
@@ -177,37 +202,46 @@ void finishOutput(std::ofstream& out, const std::string& path) {
   if (!out) throw std::runtime_error("writing '" + path + "' failed");
 }
 
-int run(const Options& options) {
-  YAML::Node root = pbd_cloth::loadSceneYaml(options.config);
-  for (const std::string& assignment : options.overrides) {
-    pbd_cloth::applyOverride(root, assignment);
-  }
-  const pbd_cloth::SceneConfig scene = pbd_cloth::sceneFromYaml(root);
+// What one run measured.
+struct BenchResult {
+  long long steps = 0;
+  double sim_time = 0.0;
+  double wall_ms_per_step = 0.0;
+  double max_strain = 0.0;  // max over the run
+  double max_penetration = 0.0;
+  int max_self_intersections = 0;
+  pbd_cloth::Metrics final_metrics;
+  double iterations_per_step = 0.0;
+  double predict_ms = 0.0, collide_ms = 0.0, project_ms = 0.0, update_ms = 0.0;
+  int particles = 0;
+  int sample_every = 1;
+};
 
-  std::ofstream csv = openOutput("--csv", options.csv);
-  std::ofstream positions = openOutput("--positions", options.positions);
-  std::ofstream mesh = openOutput("--mesh", options.mesh);
-  if (csv.is_open()) csv << "t,max_strain,mean_strain,energy,max_penetration\n";
-
+// Runs the scene for `duration` seconds of 1/step_rate steps. Only the step calls are timed.
+// Writes the CSV samples as it goes and the final positions / mesh to the streams that are open.
+BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options,
+                     std::ofstream& csv, std::ofstream& positions, std::ofstream& mesh) {
   pbd_cloth::Simulation sim(scene);
   const double step_count = options.duration * scene.step_rate;
   if (step_count > std::numeric_limits<int>::max()) {
     throw UsageError("--duration: " + std::to_string(step_count) + " steps are too many");
   }
   const long long steps = std::llround(step_count);
-  const int particle_count = sim.particles().size();
-  const int sample_every =
-      options.sample_every > 0 ? options.sample_every : (particle_count <= kLargeScene ? 1 : 10);
+  BenchResult result;
+  result.particles = sim.particles().size();
+  result.sample_every =
+      options.sample_every > 0 ? options.sample_every : (result.particles <= kLargeScene ? 1 : 10);
   if (!options.quiet) {
-    std::cerr << "cloth_bench: " << options.config << ": " << particle_count << " particles, "
+    std::cerr << "cloth_bench: " << options.config << ": " << result.particles << " particles, "
               << sim.topology().triangleCount() << " triangles, " << steps << " steps of "
-              << 1.0 / scene.step_rate << " s, metrics every " << sample_every << " step(s)\n";
+              << 1.0 / scene.step_rate << " s, metrics every " << result.sample_every
+              << " step(s)\n";
   }
 
   pbd_cloth::Metrics last = sim.computeMetrics();
-  double max_strain = last.max_strain;
-  double max_penetration = last.max_penetration;
-  int max_self_intersections = last.self_intersections;
+  result.max_strain = last.max_strain;
+  result.max_penetration = last.max_penetration;
+  result.max_self_intersections = last.self_intersections;
   writeCsvRow(csv, sim.time(), last);
 
   double step_seconds = 0.0;
@@ -226,35 +260,134 @@ int run(const Options& options) {
     project += stats.project_time;
     update += stats.update_time;
     iterations += stats.iterations;
-    if (done % sample_every != 0 && done != steps) continue;
+    if (done % result.sample_every != 0 && done != steps) continue;
     last = sim.computeMetrics();
-    max_strain = std::max(max_strain, last.max_strain);
-    max_penetration = std::max(max_penetration, last.max_penetration);
-    max_self_intersections = std::max(max_self_intersections, last.self_intersections);
+    result.max_strain = std::max(result.max_strain, last.max_strain);
+    result.max_penetration = std::max(result.max_penetration, last.max_penetration);
+    result.max_self_intersections = std::max(result.max_self_intersections, last.self_intersections);
     writeCsvRow(csv, sim.time(), last);
     // A diverged state stays diverged; stepping NaNs further only costs time.
     if (!last.finite) break;
   }
-
   if (positions.is_open()) writePositions(positions, sim.particles());
   if (mesh.is_open()) writeMesh(mesh, sim);
-  finishOutput(csv, options.csv);
-  finishOutput(positions, options.positions);
-  finishOutput(mesh, options.mesh);
-
   const double per_step = done > 0 ? 1.0 / static_cast<double>(done) : 0.0;
+  result.steps = done;
+  result.sim_time = sim.time();
+  result.final_metrics = last;
+  result.wall_ms_per_step = 1e3 * step_seconds * per_step;
+  result.iterations_per_step = static_cast<double>(iterations) * per_step;
+  result.predict_ms = 1e3 * predict * per_step;
+  result.collide_ms = 1e3 * collide * per_step;
+  result.project_ms = 1e3 * project * per_step;
+  result.update_ms = 1e3 * update * per_step;
+  return result;
+}
+
+void printResult(const pbd_cloth::SceneConfig& scene, const BenchResult& r) {
+  const pbd_cloth::Metrics& last = r.final_metrics;
   std::printf(
       "wall_ms_per_step=%.6g max_strain=%.9g mean_strain=%.9g max_penetration=%.9g "
       "self_intersections=%d energy=%.9g finite=%d steps=%lld sim_time=%.9g "
       "iterations_per_step=%.6g predict_ms=%.6g collide_ms=%.6g project_ms=%.6g update_ms=%.6g "
       "method=%s substeps=%d iterations=%d particles=%d max_self_intersections=%d "
-      "sample_every=%d\n",
-      1e3 * step_seconds * per_step, max_strain, last.mean_strain, max_penetration,
-      last.self_intersections, last.energy, last.finite ? 1 : 0, done, sim.time(),
-      static_cast<double>(iterations) * per_step, 1e3 * predict * per_step,
-      1e3 * collide * per_step, 1e3 * project * per_step, 1e3 * update * per_step,
+      "sample_every=%d final_max_strain=%.9g ordering=%s\n",
+      r.wall_ms_per_step, r.max_strain, last.mean_strain, r.max_penetration,
+      last.self_intersections, last.energy, last.finite ? 1 : 0, r.steps, r.sim_time,
+      r.iterations_per_step, r.predict_ms, r.collide_ms, r.project_ms, r.update_ms,
       pbd_cloth::toString(scene.solver.method), scene.solver.substeps, scene.solver.iterations,
-      particle_count, max_self_intersections, sample_every);
+      r.particles, r.max_self_intersections, r.sample_every, last.max_strain,
+      pbd_cloth::toString(scene.solver.ordering));
+}
+
+// --target-max-strain / --target-mean-strain: the cheapest substeps x iterations that meet the
+// target on this scene. For each iteration count the smallest substep count that meets it is
+// found by bisection (error falls as substeps rise: Small Steps, sec. 4), every candidate's cost is
+// measured, and the cheapest measured wall time wins.
+int searchCheapest(const pbd_cloth::SceneConfig& base, const Options& options) {
+  const bool use_max = options.target_max_strain > 0.0;
+  const double target = use_max ? options.target_max_strain : options.target_mean_strain;
+  const char* metric = use_max ? "max_strain" : "mean_strain";
+  Options quiet = options;
+  quiet.quiet = true;
+  std::ofstream no_output;
+  auto measure = [&](int substeps, int iterations, BenchResult& out) {
+    pbd_cloth::SceneConfig scene = base;
+    scene.solver.substeps = substeps;
+    scene.solver.iterations = iterations;
+    out = simulate(scene, quiet, no_output, no_output, no_output);
+    const double error = use_max ? out.max_strain : out.final_metrics.mean_strain;
+    const bool meets = out.final_metrics.finite && error <= target;
+    std::fprintf(stderr, "cloth_bench: substeps=%d iterations=%d %s=%.4g wall_ms_per_step=%.4g %s\n",
+                 substeps, iterations, metric, error, out.wall_ms_per_step,
+                 meets ? "meets" : "misses");
+    return meets;
+  };
+  struct Candidate {
+    int substeps = 0, iterations = 0;
+    BenchResult result;
+  };
+  std::vector<Candidate> found;
+  for (int iterations : {1, 2, 4, 8}) {
+    int low = 0, high = 1;  // low misses (0 = none tried), high is the candidate that meets
+    BenchResult result;
+    while (high <= options.max_substeps && !measure(high, iterations, result)) {
+      low = high;
+      high *= 2;
+    }
+    if (high > options.max_substeps) continue;
+    BenchResult best = result;
+    while (high - low > 1) {
+      const int mid = (low + high) / 2;
+      if (measure(mid, iterations, result)) {
+        high = mid;
+        best = result;
+      } else {
+        low = mid;
+      }
+    }
+    found.push_back({high, iterations, best});
+  }
+  if (found.empty()) {
+    std::printf("target_%s=%.6g met=0 max_substeps=%d\n", metric, target, options.max_substeps);
+    return 3;
+  }
+  const Candidate& cheapest = *std::min_element(
+      found.begin(), found.end(), [](const Candidate& a, const Candidate& b) {
+        return a.result.wall_ms_per_step < b.result.wall_ms_per_step;
+      });
+  const double error =
+      use_max ? cheapest.result.max_strain : cheapest.result.final_metrics.mean_strain;
+  std::printf("target_%s=%.6g met=1 substeps=%d iterations=%d %s=%.6g wall_ms_per_step=%.6g "
+              "method=%s ordering=%s\n",
+              metric, target, cheapest.substeps, cheapest.iterations, metric, error,
+              cheapest.result.wall_ms_per_step, pbd_cloth::toString(base.solver.method),
+              pbd_cloth::toString(base.solver.ordering));
+  std::printf("# paste into the scene YAML:\nsolver:\n  substeps: %d\n  iterations: %d\n",
+              cheapest.substeps, cheapest.iterations);
+  return 0;
+}
+
+int run(const Options& options) {
+  YAML::Node root = pbd_cloth::loadSceneYaml(options.config);
+  for (const std::string& assignment : options.overrides) {
+    pbd_cloth::applyOverride(root, assignment);
+  }
+  const pbd_cloth::SceneConfig scene = pbd_cloth::sceneFromYaml(root);
+  if (options.target_max_strain > 0.0 || options.target_mean_strain > 0.0) {
+    return searchCheapest(scene, options);
+  }
+
+  std::ofstream csv = openOutput("--csv", options.csv);
+  std::ofstream positions = openOutput("--positions", options.positions);
+  std::ofstream mesh = openOutput("--mesh", options.mesh);
+  if (csv.is_open()) csv << "t,max_strain,mean_strain,energy,max_penetration\n";
+
+  const BenchResult result = simulate(scene, options, csv, positions, mesh);
+  finishOutput(csv, options.csv);
+  finishOutput(positions, options.positions);
+  finishOutput(mesh, options.mesh);
+  printResult(scene, result);
   return 0;
 }
 

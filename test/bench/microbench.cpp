@@ -92,10 +92,19 @@ struct SolverRig {
   Collisions collisions;
 };
 
+// The two counters every benchmark reports (Google Benchmark's CSV needs the same set in every
+// row): `count` (constraints, hinges, tests or particles per pass) and `ns_per_item`, the measured
+// seconds spread over `items` per iteration.
+void setCounters(benchmark::State& state, double count, double seconds, double items) {
+  state.counters["count"] = count;
+  state.counters["ns_per_item"] =
+      benchmark::Counter(1e9 * seconds / items, benchmark::Counter::kAvgIterations);
+}
+
 // ns per stretch projection: args = {method, ordering, passes}.
 void BM_StretchProjection(benchmark::State& state) {
-  SceneConfig scene = clothScene(static_cast<Method>(state.range(0)),
-                                 static_cast<int>(state.range(2)), false);
+  SceneConfig scene =
+      clothScene(static_cast<Method>(state.range(0)), static_cast<int>(state.range(2)), false);
   scene.solver.ordering = static_cast<Ordering>(state.range(1));
   SolverRig rig(scene);
   const double projections =
@@ -106,11 +115,9 @@ void BM_StretchProjection(benchmark::State& state) {
     state.SetIterationTime(seconds);
     total += seconds;
   }
-  state.counters["constraints"] = static_cast<double>(rig.topology.stretch.size());
-  state.counters["ns_per_projection"] =
-      benchmark::Counter(1e9 * total / projections, benchmark::Counter::kAvgIterations);
-  state.SetLabel(std::string(toString(scene.solver.method)) + "/" +
-                 toString(scene.solver.ordering));
+  setCounters(state, static_cast<double>(rig.topology.stretch.size()), total, projections);
+  state.SetLabel(std::string(toString(scene.solver.method)) + " " +
+                 toString(scene.solver.ordering) + ": per stretch projection");
 }
 
 // ns per bending projection: a step with hinges minus the same step without, per hinge and pass.
@@ -126,10 +133,8 @@ void BM_BendProjection(benchmark::State& state) {
     difference += seconds - without.timedStep();
     state.SetIterationTime(seconds);
   }
-  state.counters["hinges"] = static_cast<double>(with.topology.bend.size());
-  state.counters["ns_per_projection"] =
-      benchmark::Counter(1e9 * difference / projections, benchmark::Counter::kAvgIterations);
-  state.SetLabel(toString(method));
+  setCounters(state, static_cast<double>(with.topology.bend.size()), difference, projections);
+  state.SetLabel(std::string(toString(method)) + ": per bending projection");
 }
 
 // Contacts of one scene: the broad phase once, then timed passes of Collisions::project from the
@@ -166,9 +171,7 @@ void runContactPasses(benchmark::State& state, ContactRig& rig, int tests_per_pa
     state.SetIterationTime(seconds);
     total += seconds;
   }
-  state.counters["tests"] = tests_per_pass;
-  state.counters["ns_per_test"] =
-      benchmark::Counter(1e9 * total / tests_per_pass, benchmark::Counter::kAvgIterations);
+  setCounters(state, tests_per_pass, total, tests_per_pass);
   state.SetLabel(label);
 }
 
@@ -222,9 +225,8 @@ void BM_SelfCollision(benchmark::State& state) {
   for (int r = rows / 2; r < rows; ++r) {
     for (int c = 0; c < cols; ++c) {
       // Row r lies over row rows-1-r, on the other layer.
-      rig.particles.position[r * cols + c] =
-          rig.particles.position[(rows - 1 - r) * cols + c] +
-          Vec3(0.0, 0.0, 0.5 * scene.cloth.thickness);
+      rig.particles.position[r * cols + c] = rig.particles.position[(rows - 1 - r) * cols + c] +
+                                             Vec3(0.0, 0.0, 0.5 * scene.cloth.thickness);
     }
   }
   runContactPasses(state, rig, rig.particles.cloth_count, "per cloth particle");
@@ -237,12 +239,16 @@ void BM_SelfCollisionBroadPhase(benchmark::State& state) {
   scene.cloth.pinned.clear();
   scene.cloth.self_collision = true;
   ContactRig rig(scene);
+  double total = 0.0;
   for (auto _ : state) {
     const Clock::time_point start = Clock::now();
     rig.collisions.beginStep(rig.particles, rig.topology, 1.0 / 60.0);
-    state.SetIterationTime(secondsSince(start));
+    const double seconds = secondsSince(start);
+    state.SetIterationTime(seconds);
+    total += seconds;
   }
-  state.SetLabel("per step");
+  setCounters(state, rig.particles.cloth_count, total, rig.particles.cloth_count);
+  state.SetLabel("per step, ns per cloth particle");
 }
 
 // A whole step of config/hanging.yaml (its substeps and passes) per method. mass_spring runs its
@@ -264,15 +270,20 @@ void BM_HangingStep(benchmark::State& state) {
   }
   Simulation sim(scene);
   long steps = 0;
+  double total = 0.0;
   for (auto _ : state) {
     if (++steps % 180 == 0) sim.reset();  // stay within the 3 s of the sweeps
     const Clock::time_point start = Clock::now();
     sim.step();
-    state.SetIterationTime(secondsSince(start));
+    const double seconds = secondsSince(start);
+    state.SetIterationTime(seconds);
+    total += seconds;
   }
+  const double particles = sim.particles().size();
+  setCounters(state, particles, total, particles);
   state.SetLabel(std::string(toString(scene.solver.method)) + " " +
                  std::to_string(scene.solver.substeps) + "x" +
-                 std::to_string(scene.solver.iterations));
+                 std::to_string(scene.solver.iterations) + ": whole step, per particle");
 }
 
 constexpr int kGaussSeidel = static_cast<int>(Ordering::kGaussSeidel);

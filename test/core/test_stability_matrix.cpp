@@ -119,7 +119,8 @@ TEST(StabilityMatrix, PbdStableOverStiffnessDtMassRatioIterations) {
 // (an interior particle, two springs), so dt_max = 2 / w_max = 1 / sqrt(k). The chain hangs at
 // rest length and gravity sets it oscillating (the linear regime the limit is about; a chain
 // released horizontally swings into large stretch, where symplectic Euler needs more margin). Its
-// true highest mode is 0.3 % (ratio 1) to 0.5 % (heavy end) below the bound, inside the 2 % margins.
+// true highest mode is 0.3 % (ratio 1) to 0.5 % (heavy end) below the bound, inside the 2 %
+// margins.
 TEST(StabilityMatrix, MassSpringUnstableJustPastAnalyticLimitStableJustBelow) {
   for (double k : {1e5, 1e6, 1e7}) {
     for (double ratio : {1.0, 1e3}) {
@@ -203,8 +204,7 @@ TEST(StabilityMatrix, PlainJacobiDivergesOnClothNotOnChainAveragedIsStable) {
   const RunResult averaged = run(cloth(true), 1.0);
   EXPECT_FALSE(stable(plain) && plain.max_strain < 1.0)
       << "plain Jacobi on cloth: finite " << plain.finite << ", max strain " << plain.max_strain;
-  EXPECT_TRUE(stable(averaged)) << "averaged Jacobi on cloth: energy gain "
-                                << averaged.energy_gain;
+  EXPECT_TRUE(stable(averaged)) << "averaged Jacobi on cloth: energy gain " << averaged.energy_gain;
   EXPECT_LT(averaged.max_strain, 1.0);
 
   SceneConfig chain = swingingChain(Method::kXpbd, 1.0, 60.0, 2);

@@ -1,23 +1,29 @@
 // cloth_node's ROS interface, checked against the scene it was started with (cloth_node.test loads
 // test/ros/small_scene.yaml; the expectations are read back from the parameter server, so the scene
-// can change without touching this file).
+// can change without touching this file). nodelet.test runs the same checks on the nodelet: the
+// node under test is the client's private parameter ~node (default /cloth_node).
 #include <algorithm>
 #include <cmath>
-#include <functional>
-#include <mutex>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
 #include <ros/ros.h>
-#include <std_srvs/Trigger.h>
 #include <visualization_msgs/MarkerArray.h>
 
 #include "pbd_cloth/ClothState.h"
+#include "ros_test_helpers.h"
 
 namespace {
 
-const char kNode[] = "/cloth_node";
+using pbd_cloth_test::distance;
+using pbd_cloth_test::Recorder;
+using pbd_cloth_test::StateRecorder;
+
+const std::string& node() {
+  static const std::string name = pbd_cloth_test::nodeName();
+  return name;
+}
 
 // The parts of the scene the checks need.
 struct Scene {
@@ -33,7 +39,7 @@ struct Scene {
 };
 
 Scene readScene() {
-  ros::NodeHandle nh(kNode);
+  ros::NodeHandle nh(node());
   Scene scene;
   EXPECT_TRUE(nh.getParam("cloth/rows", scene.rows));
   EXPECT_TRUE(nh.getParam("cloth/cols", scene.cols));
@@ -61,100 +67,15 @@ geometry_msgs::Point initialPosition(const Scene& s, int index) {
   return p;
 }
 
-double distance(const geometry_msgs::Point& a, const geometry_msgs::Point& b) {
-  return std::sqrt((a.x - b.x) * (a.x - b.x) + (a.y - b.y) * (a.y - b.y) +
-                   (a.z - b.z) * (a.z - b.z));
-}
-
-// Keeps every message of a topic; the AsyncSpinner in main() fills it while a test waits.
-template <typename Message>
-class Recorder {
- public:
-  explicit Recorder(const std::string& topic) {
-    ros::NodeHandle nh;
-    subscriber_ = nh.subscribe(topic, 100, &Recorder::callback, this);
-  }
-
-  // The first message that arrives after this call and satisfies `accept`, or false on timeout.
-  bool waitForNext(Message& out, double timeout,
-                   const std::function<bool(const Message&)>& accept = nullptr) {
-    return waitFrom(count(), out, timeout, accept);
-  }
-
-  // As above, from the `first`-th message received (count() taken before triggering it).
-  bool waitFrom(std::size_t first, Message& out, double timeout,
-                const std::function<bool(const Message&)>& accept = nullptr) {
-    std::size_t seen = first;
-    const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(timeout);
-    while (ros::ok() && ros::WallTime::now() < deadline) {
-      {
-        std::lock_guard<std::mutex> lock(mutex_);
-        for (; seen < messages_.size(); ++seen) {
-          if (!accept || accept(messages_[seen])) {
-            out = messages_[seen];
-            return true;
-          }
-        }
-      }
-      ros::WallDuration(0.005).sleep();
-    }
-    return false;
-  }
-
-  // Copies of the messages received from the `first`-th on.
-  std::vector<Message> since(std::size_t first) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return std::vector<Message>(messages_.begin() + std::min(first, messages_.size()),
-                                messages_.end());
-  }
-
-  std::size_t count() {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return messages_.size();
-  }
-
- private:
-  void callback(const Message& msg) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    messages_.push_back(msg);
-  }
-
-  ros::Subscriber subscriber_;
-  std::mutex mutex_;
-  std::vector<Message> messages_;
-};
-
-using StateRecorder = Recorder<pbd_cloth::ClothState>;
-
-bool callReset() {
-  std_srvs::Trigger trigger;
-  const std::string service = std::string(kNode) + "/reset";
-  return ros::service::waitForService(service, ros::Duration(10.0)) &&
-         ros::service::call(service, trigger) && trigger.response.success;
-}
-
-// The state the node publishes from inside ~reset: simulated time exactly 0.
 bool resetAndReceiveInitialState(StateRecorder& recorder, pbd_cloth::ClothState& initial) {
-  // A first message proves the subscription is connected, so the reset state cannot be missed.
-  pbd_cloth::ClothState any;
-  if (!recorder.waitForNext(any, 10.0)) {
-    return false;
-  }
-  // Counted before the call: the node publishes before the service returns.
-  const std::size_t before = recorder.count();
-  if (!callReset()) {
-    return false;
-  }
-  return recorder.waitFrom(before, initial, 5.0, [](const pbd_cloth::ClothState& msg) {
-    return msg.stats.sim_time < 1e-9;
-  });
+  return pbd_cloth_test::resetAndReceiveInitialState(node(), recorder, initial);
 }
 
 TEST(ClothNode, PublishesTheWholeGrid) {
   const Scene scene = readScene();
-  StateRecorder recorder(std::string(kNode) + "/state");
+  StateRecorder recorder(node() + "/state");
   pbd_cloth::ClothState state;
-  ASSERT_TRUE(recorder.waitForNext(state, 10.0)) << "no message on " << kNode << "/state";
+  ASSERT_TRUE(recorder.waitForNext(state, 10.0)) << "no message on " << node() << "/state";
 
   const std::size_t n = scene.rows * scene.cols;
   EXPECT_EQ(state.header.frame_id, scene.frame_id);
@@ -172,7 +93,7 @@ TEST(ClothNode, PublishesTheWholeGrid) {
 
 TEST(ClothNode, ListsPinnedParticlesAsKinematic) {
   Scene scene = readScene();
-  StateRecorder recorder(std::string(kNode) + "/state");
+  StateRecorder recorder(node() + "/state");
   pbd_cloth::ClothState state;
   ASSERT_TRUE(recorder.waitForNext(state, 10.0));
   std::vector<int> kinematic(state.kinematic.begin(), state.kinematic.end());
@@ -183,7 +104,7 @@ TEST(ClothNode, ListsPinnedParticlesAsKinematic) {
 
 TEST(ClothNode, ReportsTheSceneSubstepsAndRealTime) {
   const Scene scene = readScene();
-  StateRecorder recorder(std::string(kNode) + "/state");
+  StateRecorder recorder(node() + "/state");
   pbd_cloth::ClothState state;
   // After more than a second of stepping, so the real-time factor spans its whole window.
   ASSERT_TRUE(recorder.waitForNext(
@@ -198,7 +119,7 @@ TEST(ClothNode, ReportsTheSceneSubstepsAndRealTime) {
 
 TEST(ClothNode, ResetRestoresTheInitialState) {
   const Scene scene = readScene();
-  StateRecorder recorder(std::string(kNode) + "/state");
+  StateRecorder recorder(node() + "/state");
   pbd_cloth::ClothState first;
   ASSERT_TRUE(recorder.waitForNext(first, 10.0));
 
@@ -229,7 +150,7 @@ TEST(ClothNode, ResetRestoresTheInitialState) {
 
 TEST(ClothNode, PinnedParticlesStayWhileTheClothFalls) {
   const Scene scene = readScene();
-  StateRecorder recorder(std::string(kNode) + "/state");
+  StateRecorder recorder(node() + "/state");
   pbd_cloth::ClothState initial;
   ASSERT_TRUE(resetAndReceiveInitialState(recorder, initial));
 
@@ -257,9 +178,9 @@ TEST(ClothNode, PinnedParticlesStayWhileTheClothFalls) {
 
 TEST(ClothNode, PublishesALitMeshAndParticles) {
   const Scene scene = readScene();
-  Recorder<visualization_msgs::MarkerArray> recorder(std::string(kNode) + "/markers");
+  Recorder<visualization_msgs::MarkerArray> recorder(node() + "/markers");
   visualization_msgs::MarkerArray markers;
-  ASSERT_TRUE(recorder.waitForNext(markers, 10.0)) << "no message on " << kNode << "/markers";
+  ASSERT_TRUE(recorder.waitForNext(markers, 10.0)) << "no message on " << node() << "/markers";
 
   const visualization_msgs::Marker* mesh = nullptr;
   const visualization_msgs::Marker* particles = nullptr;
@@ -282,15 +203,52 @@ TEST(ClothNode, PublishesALitMeshAndParticles) {
   EXPECT_EQ(particles->pose.orientation.w, 1.0);
 }
 
+// Normal (not normalised) of the triangle a, b, c.
+geometry_msgs::Point triangleNormal(const geometry_msgs::Point& a, const geometry_msgs::Point& b,
+                                    const geometry_msgs::Point& c) {
+  const double ux = b.x - a.x, uy = b.y - a.y, uz = b.z - a.z;
+  const double vx = c.x - a.x, vy = c.y - a.y, vz = c.z - a.z;
+  return pbd_cloth_test::point(uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx);
+}
+
+double dot(const geometry_msgs::Point& a, const geometry_msgs::Point& b) {
+  return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+
+TEST(ClothNode, MeshHasThreePointsPerTriangleOfTheStateWoundOneWay) {
+  StateRecorder states(node() + "/state");
+  Recorder<visualization_msgs::MarkerArray> marker_arrays(node() + "/markers");
+  pbd_cloth::ClothState initial;
+  ASSERT_TRUE(resetAndReceiveInitialState(states, initial));
+  visualization_msgs::MarkerArray markers;
+  ASSERT_TRUE(marker_arrays.waitForNext(markers, 10.0));
+  const visualization_msgs::Marker* mesh = nullptr;
+  for (const auto& marker : markers.markers) {
+    if (marker.ns == "cloth") mesh = &marker;
+  }
+  ASSERT_NE(mesh, nullptr);
+  ASSERT_GT(initial.triangles.size(), 0u);
+  EXPECT_EQ(mesh->points.size(), initial.triangles.size()) << "3 points per triangle of ~state";
+
+  // The flat initial grid: every triangle of ~state faces the same side.
+  const auto& t = initial.triangles;
+  const auto& x = initial.positions;
+  const geometry_msgs::Point first = triangleNormal(x[t[0]], x[t[1]], x[t[2]]);
+  for (std::size_t k = 0; k < t.size(); k += 3) {
+    EXPECT_GT(dot(triangleNormal(x[t[k]], x[t[k + 1]], x[t[k + 2]]), first), 0.0)
+        << "triangle " << k / 3 << " is wound the other way";
+  }
+  // The mesh marker of a moving cloth: the two triangles of each grid cell (consecutive in the
+  // list) face the same side, so rviz lights both alike.
+  const auto& p = mesh->points;
+  for (std::size_t k = 0; k + 5 < p.size(); k += 6) {
+    EXPECT_GT(
+        dot(triangleNormal(p[k], p[k + 1], p[k + 2]), triangleNormal(p[k + 3], p[k + 4], p[k + 5])),
+        0.0)
+        << "cell " << k / 6;
+  }
+}
+
 }  // namespace
 
-int main(int argc, char** argv) {
-  testing::InitGoogleTest(&argc, argv);
-  ros::init(argc, argv, "cloth_node_test");
-  ros::AsyncSpinner spinner(1);
-  spinner.start();
-  const int result = RUN_ALL_TESTS();
-  spinner.stop();
-  ros::shutdown();
-  return result;
-}
+int main(int argc, char** argv) { return pbd_cloth_test::runTests(argc, argv, "cloth_node_test"); }

@@ -1,55 +1,140 @@
-// The ROS side of the simulator: reads the scene from the private namespace, steps a Simulation on
-// a wall timer, publishes ~state and ~markers and serves ~reset. cloth_node and ClothNodelet both
-// build this one class, so the two entry points cannot drift apart.
+// The ROS side of the simulator. cloth_node and ClothNodelet both build this one class, so the two
+// entry points cannot drift apart. In the node's private namespace:
+//   ~state, ~markers          out at publish_rate (markers only built while someone subscribes)
+//   ~<gripper>/pose           in: geometry_msgs/PoseStamped in any tf frame (not subscribed when
+//                             the gripper follows its scene tf_frame instead)
+//   ~<obstacle>/pose          in: the same, for obstacles (moved as kinematic colliders)
+//   ~<gripper>/grasp          std_srvs/SetBool: true grasps what is within the radius (success
+//                             false and the reason when nothing is), false releases
+//   ~<gripper>/wrench         out: geometry_msgs/WrenchStamped, the force the cloth pulls on the
+//                             gripper, in the scene frame (torque not computed: zero)
+//   ~grasp_by_name            in: diagnostic_msgs/KeyValue {key: gripper, value: true|false}. The
+//                             same as ~<gripper>/grasp, but a name the scene lacks reaches the node
+//                             and is counted as a rejected input (a missing service cannot be
+//                             called, so it could never be counted)
+//   ~reset                    std_srvs/Trigger
+//   ~set_parameters, ...      dynamic_reconfigure of cfg/Solver.cfg (solver_reconfigure.h)
+//   /diagnostics              cloth_diagnostics.h
+// Node settings beside the scene: ~tf_timeout, ~pose_period, ~max_pose_period,
+// ~min_real_time_factor (Config below).
+//
+// Pose messages are smoothed into one target per step by a PoseFollower per body (see
+// pose_follower.h for the policy). Refused inputs (pose_transformer.h, input_rejections.h) leave
+// the body where its last good input put it.
+//
+// Threads. Steps, publishing, services and reconfigure run on the node handle's callback queue.
+// Pose messages run on a queue of their own with its own thread: bringing a pose into the scene
+// frame may wait up to tf_timeout for tf, and that wait must not hold up the steps. The tf
+// listener fills the buffer from its own thread. `mutex_` guards the simulation and the inputs.
 #pragma once
 
-#include <cstdint>
 #include <memory>
 #include <mutex>
+#include <string>
+#include <vector>
 
+#include <diagnostic_msgs/KeyValue.h>
+#include <geometry_msgs/PoseStamped.h>
+#include <ros/callback_queue.h>
 #include <ros/ros.h>
+#include <std_srvs/SetBool.h>
 #include <std_srvs/Trigger.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_listener.h>
 
+#include "pbd_cloth/ros/cloth_diagnostics.h"
+#include "pbd_cloth/ros/input_rejections.h"
+#include "pbd_cloth/ros/pose_follower.h"
+#include "pbd_cloth/ros/pose_transformer.h"
 #include "pbd_cloth/ros/real_time_factor.h"
+#include "pbd_cloth/ros/solver_reconfigure.h"
 #include "pbd_cloth/simulation.h"
 
 namespace pbd_cloth {
 
 class ClothRos {
  public:
-  // Reads and validates the scene, builds the simulation and starts the timers. On an invalid
-  // scene it logs ROS_FATAL naming the key and its allowed range and rethrows the ConfigError, so
-  // the caller can exit non-zero instead of simulating something the user did not ask for.
+  // Node settings beside the scene, private parameters of their own (ros_params.h reads them).
+  struct Config {
+    double tf_timeout = 0.1;        // ~tf_timeout (s): how long a pose waits for its transform
+    PoseFollower::Config follower;  // ~pose_period, ~max_pose_period
+    ClothDiagnostics::Config diagnostics;  // ~min_real_time_factor
+  };
+
+  // Reads and validates the scene and the node settings, builds the simulation and starts the
+  // timers. On an invalid value it logs ROS_FATAL naming the key and its allowed range and
+  // rethrows the ConfigError, so the caller can exit non-zero instead of simulating something the
+  // user did not ask for.
   ClothRos(ros::NodeHandle nh, ros::NodeHandle nh_private);
+  ~ClothRos();
 
   ClothRos(const ClothRos&) = delete;
   ClothRos& operator=(const ClothRos&) = delete;
 
  private:
+  // A gripper or an obstacle driven by ~<name>/pose (or, for a gripper, by a tf frame).
+  struct Body {
+    bool is_gripper = false;
+    int index = 0;  // in the simulation's grippers or obstacles
+    std::string name;
+    std::string pose_topic;  // resolved, for warnings
+    std::string tf_frame;    // grippers only: followed instead of pose_topic when not empty
+    PoseFollower follower;
+    ros::Time last_stamp;  // of the last accepted pose (message or tf)
+    bool tf_seen = false;  // tf_frame was found at least once
+    bool tf_ok = false;    // the last poll of tf_frame succeeded
+    ros::Subscriber pose_subscriber;
+    ros::ServiceServer grasp_service;  // grippers only
+    ros::Publisher wrench_publisher;   // grippers only
+  };
+
+  void createBodies();
   void stepCallback(const ros::WallTimerEvent& event);
   void publishCallback(const ros::WallTimerEvent& event);
+  void diagnosticsCallback(const ros::WallTimerEvent& event);
   bool resetCallback(std_srvs::Trigger::Request& request, std_srvs::Trigger::Response& response);
+  void poseCallback(Body& body, const geometry_msgs::PoseStamped& msg);
+  bool graspCallback(const Body& body, std_srvs::SetBool::Request& request,
+                     std_srvs::SetBool::Response& response);
+  void graspByNameCallback(const diagnostic_msgs::KeyValue& msg);
+  SolverTuning reconfigure(const SolverTuning& requested, unsigned groups);
 
-  // Both expect mutex_ held.
+  // All expect mutex_ held.
+  Pose currentPose(const Body& body) const;
+  void pollTfFrames();
+  void driveBodies(double step_end);
   void publishState();
   void publishMarkers();
+  void publishWrenches();
 
   ros::NodeHandle nh_;
   ros::NodeHandle nh_private_;
+  Config config_;
 
-  // Guards everything below. The node spins one thread, but a nodelet manager or later inputs
-  // (gripper poses, tf, dynamic_reconfigure) may call in from other threads.
-  std::mutex mutex_;
+  std::mutex mutex_;  // guards the simulation and every Body's input state
   std::unique_ptr<Simulation> sim_;
   RealTimeFactor real_time_factor_;
-  std::uint32_t rejected_inputs_ = 0;  // inputs refused since start (bad poses, unknown frames)
+  InputRejections rejections_;  // has its own lock: the input thread rejects without mutex_
+
+  tf2_ros::Buffer tf_buffer_;
+  std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
+  std::unique_ptr<PoseTransformer> pose_transformer_;
+
+  // Before the bodies: their subscribers detach from it when they are destroyed.
+  ros::CallbackQueue input_queue_;
+  std::vector<Body> bodies_;  // grippers, then obstacles; never resized after start-up
 
   ros::Publisher state_pub_;
   ros::Publisher markers_pub_;
   ros::ServiceServer reset_service_;
+  ros::Subscriber grasp_by_name_sub_;
+  std::unique_ptr<SolverReconfigure> reconfigure_;
+  std::unique_ptr<ClothDiagnostics> diagnostics_;
   // Declared last so they stop first on destruction, before the simulation they drive.
   ros::WallTimer step_timer_;
   ros::WallTimer publish_timer_;
+  ros::WallTimer diagnostics_timer_;
+  std::unique_ptr<ros::AsyncSpinner> input_spinner_;
 };
 
 }  // namespace pbd_cloth

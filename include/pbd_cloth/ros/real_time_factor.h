@@ -16,6 +16,10 @@ class RealTimeFactor {
   void add(double wall_time, double sim_time);
   // Ratio over the last `window` wall seconds; 0 until two samples span some wall time.
   double value() const;
+  // Wall seconds the samples cover: a factor over a short span after start or reset says little.
+  double span() const {
+    return samples_.size() < 2 ? 0.0 : samples_.back().first - samples_.front().first;
+  }
   // Forget the history, e.g. when the simulated time jumps back on reset.
   void clear() { samples_.clear(); }
 

@@ -41,6 +41,17 @@ class RosConversions {
   static void toParticleMarkers(const Simulation& sim, const std_msgs::Header& header,
                                 visualization_msgs::MarkerArray& markers);
 
+  // ns `obstacles`: each obstacle in its own shape at its current pose (SPHERE, CUBE, a CYLINDER
+  // and two SPHEREs for a capsule, a large thin CUBE for a plane). Obstacle k owns ids 3k..3k+2,
+  // so every id keeps its shape for the whole run and rviz updates it in place.
+  static void toObstacleMarkers(const Simulation& sim, const std_msgs::Header& header,
+                                visualization_msgs::MarkerArray& markers);
+
+  // ns `grippers`: a SPHERE of the grasp radius at each gripper (id = gripper index), green while
+  // it holds particles, yellow while open; translucent so the grasped particles show.
+  static void toGripperMarkers(const Simulation& sim, const std_msgs::Header& header,
+                               visualization_msgs::MarkerArray& markers);
+
   // The whole ~markers message.
   static void toMarkerArray(const Simulation& sim, const std_msgs::Header& header,
                             visualization_msgs::MarkerArray& markers);

@@ -9,6 +9,7 @@
 #include <xmlrpcpp/XmlRpcValue.h>
 #include <yaml-cpp/yaml.h>
 
+#include "pbd_cloth/ros/cloth_ros.h"
 #include "pbd_cloth/scene_config.h"
 
 namespace pbd_cloth {
@@ -26,5 +27,9 @@ YAML::Node sceneYamlFromParameters(const ros::NodeHandle& nh_private);
 
 // Reads and validates the scene; throws ConfigError naming the bad key and its allowed range.
 SceneConfig readSceneParameters(const ros::NodeHandle& nh_private);
+
+// The node's own settings beside the scene (~tf_timeout, ~pose_period, ~max_pose_period,
+// ~min_real_time_factor); a missing key keeps its default, a bad one throws ConfigError.
+ClothRos::Config readNodeParameters(const ros::NodeHandle& nh_private);
 
 }  // namespace pbd_cloth

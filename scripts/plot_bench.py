@@ -1,0 +1,634 @@
+#!/usr/bin/python3
+"""Charts and summary of the bench sweeps (scripts/run_bench). Reads doc/sweep_*.csv and
+doc/microbench.csv, writes doc/*.png and doc/bench_summary.md, and prints the summary.
+
+    /usr/bin/python3 scripts/plot_bench.py [--data doc] [--env doc/bench_env.txt]
+
+/usr/bin/python3 with Debian's python3-matplotlib (Agg backend, no display needed).
+"""
+import argparse
+import csv
+import math
+import os
+import sys
+
+import matplotlib
+
+matplotlib.use('Agg')
+import matplotlib.pyplot as plt  # noqa: E402  (after the backend choice)
+from matplotlib.colors import LogNorm  # noqa: E402
+
+REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+G = 9.81
+DIVERGED_STRAIN = 1e3     # links 1000 x rest length: blown up (a crumpled cloth reaches 300)
+BOUNDED_ENERGY = 10.0     # stable: energy never above E0 + 10 M g L (test_stability_matrix.cpp)
+TARGET = 0.01             # the tolerance of issue 6: max strain 1 %
+
+# One style per curve of the charts, in legend order.
+STYLES = [
+    ('xpbd', dict(color='tab:blue', marker='o')),
+    ('xpbd, no bending', dict(color='tab:cyan', marker='o')),
+    ('xpbd + tethers', dict(color='navy', marker='*')),
+    ('xpbd jacobi', dict(color='tab:purple', marker='v')),
+    ('pbd', dict(color='tab:green', marker='s')),
+    ('verlet', dict(color='tab:olive', marker='D')),
+    ('mass_spring', dict(color='tab:brown', marker='P')),
+    ('bullet', dict(color='tab:red', marker='^')),
+    ('bullet + bending links', dict(color='tab:orange', marker='^')),
+]
+STYLE = dict(STYLES)
+
+
+def number(text, default=float('nan')):
+    try:
+        return float(text)
+    except (TypeError, ValueError):
+        return default
+
+
+def load(path):
+    if not os.path.exists(path):
+        return []
+    with open(path, newline='') as handle:
+        rows = list(csv.DictReader(handle))
+    for row in rows:
+        for key in ('wall_ms_per_step', 'max_strain', 'mean_strain', 'energy', 'substeps',
+                    'iterations', 'passes', 'mass_ratio', 'end_drop', 'max_penetration',
+                    'spring_stiffness'):
+            row[key] = number(row.get(key))
+        row['ok'] = row.get('exit_status') == '0' and row.get('finite') == '1'
+    return rows
+
+
+def converged_run(row):
+    """Finite, exited normally, and not blown up (a diverged run can stay finite: Bullet clamps)."""
+    return row['ok'] and row['max_strain'] < DIVERGED_STRAIN
+
+
+def pareto(points):
+    """Non-dominated (cost, error) points, by increasing cost."""
+    front = []
+    for cost, error, row in sorted(points, key=lambda p: (p[0], p[1])):
+        if not front or error < front[-1][1]:
+            front.append((cost, error, row))
+    return front
+
+
+def setting(row):
+    if row['method'] == 'bullet':
+        text = 'bullet.substeps=%d bullet.piterations=%d' % (row['substeps'], row['iterations'])
+        if row.get('variant') == 'bending_links':
+            text += ' bullet.bending=1'
+        return text
+    text = 'solver.method=%s solver.substeps=%d solver.iterations=%d' % (
+        row['method'], row['substeps'], row['iterations'])
+    if row.get('ordering') == 'jacobi':
+        text += ' solver.ordering=jacobi'
+    if row.get('variant') == 'no_bending':
+        text += ' cloth.bend_compliance=-1'
+    if row.get('variant') == 'tethers':
+        text += ' cloth.tethers=true'
+    if row['method'] == 'mass_spring':
+        text += ' solver.spring_stiffness=%g solver.bend_spring_stiffness=0.01' % (
+            row['spring_stiffness'])
+    return text
+
+
+def curves_of(rows):
+    names = [name for name, _ in STYLES if any(r['curve'] == name for r in rows)]
+    return names + sorted({r['curve'] for r in rows} - set(names))
+
+
+# --- Speed against accuracy -----------------------------------------------------------------------
+
+def pareto_panel(ax, rows, metric, ylabel, target=None):
+    everything = []
+    top = max([r[metric] for r in rows if converged_run(r) and r[metric] > 0] or [1.0]) * 3.0
+    for name in curves_of(rows):
+        style = STYLE.get(name, dict(color='gray', marker='.'))
+        mine = [r for r in rows if r['curve'] == name]
+        good = [(r['wall_ms_per_step'], r[metric], r) for r in mine
+                if converged_run(r) and r[metric] > 0]
+        bad = [r for r in mine if not converged_run(r)]
+        everything += good
+        label = '%s (%d runs%s)' % (name, len(mine),
+                                    ', %d diverged' % len(bad) if bad else '')
+        if good:
+            ax.scatter([p[0] for p in good], [p[1] for p in good], s=12, alpha=0.3,
+                       color=style['color'], marker=style['marker'], linewidths=0)
+            front = pareto(good)
+            ax.plot([p[0] for p in front], [p[1] for p in front], '-', color=style['color'],
+                    marker=style['marker'], markersize=5, linewidth=1.4, label=label)
+        if bad:
+            # Runs stopped by the time limit have no time per step: not drawn, counted in the label.
+            costs = [r['wall_ms_per_step'] for r in bad if r['wall_ms_per_step'] > 0]
+            ax.scatter(costs, [top] * len(costs), marker='x', s=30, color=style['color'],
+                       label=None if good else label)
+    front = pareto(everything)
+    if front:
+        xs, ys = [], []
+        for cost, error, _ in front:
+            if xs:
+                xs.append(cost)
+                ys.append(ys[-1])
+            xs.append(cost)
+            ys.append(error)
+        ax.plot(xs, ys, '-', color='black', linewidth=3, alpha=0.25, zorder=0,
+                label='Pareto front, all runs')
+    if target:
+        ax.axhline(target, color='gray', linestyle=':', linewidth=1)
+        ax.annotate('%g %%' % (100 * target), xy=(0.01, target), xycoords=('axes fraction', 'data'),
+                    va='bottom', color='gray', fontsize=8)
+    ax.set_xscale('log')
+    ax.set_yscale('log')
+    ax.set_xlabel('wall time per step (ms, one thread)')
+    ax.set_ylabel(ylabel)
+    ax.grid(True, which='major', alpha=0.3)
+    ax.text(0.99, 0.99, 'x at the top: diverged runs (at their time per step)',
+            transform=ax.transAxes, ha='right',
+            va='top', fontsize=7, color='gray')
+
+
+def pareto_figure(rows, metrics, title, path):
+    fig, axes = plt.subplots(1, len(metrics), figsize=(6.4 * len(metrics), 5.6))
+    if len(metrics) == 1:
+        axes = [axes]
+    for ax, (metric, label, target) in zip(axes, metrics):
+        pareto_panel(ax, rows, metric, label, target)
+    axes[0].legend(fontsize=7, loc='lower left')
+    fig.suptitle(title, fontsize=11)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def chain_figure(rows, path):
+    ratios = sorted({r['mass_ratio'] for r in rows})
+    fig, axes = plt.subplots(1, len(ratios), figsize=(6.4 * len(ratios), 5.4))
+    if len(ratios) == 1:
+        axes = [axes]
+    for ax, ratio in zip(axes, ratios):
+        mine = [dict(r, end_drop_abs=abs(r['end_drop'])) for r in rows if r['mass_ratio'] == ratio]
+        pareto_panel(ax, mine, 'end_drop_abs', 'drop of the end mass below rest (m)')
+        ax.set_title('end mass 1:%g' % ratio, fontsize=10)
+    axes[0].legend(fontsize=7, loc='lower left')
+    fig.suptitle('config/chain_heavy.yaml (REFERENCE_CASES case 5), 10 s at 60 Hz: cost against '
+                 'the error of the heavy end', fontsize=11)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def substeps_panel(ax, rows, metric, totals, title, ylabel):
+    colors = plt.cm.viridis([k / max(1, len(totals) - 1) for k in range(len(totals))])
+    for color, total in zip(colors, totals):
+        mine = sorted([r for r in rows if r['passes'] == total and converged_run(r)
+                       and abs(r[metric]) > 0], key=lambda r: r['substeps'])
+        if not mine:
+            continue
+        ax.plot([r['substeps'] for r in mine], [abs(r[metric]) for r in mine], '-o',
+                color=color, markersize=4, label='%d passes per step' % total)
+    ax.set_xscale('log', base=2)
+    ax.set_yscale('log')
+    ax.set_xlabel('substeps (iterations = passes / substeps)')
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, fontsize=9)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7)
+
+
+def substeps_figure(hanging, chain, path):
+    panels = []
+    for ratio in sorted({r['mass_ratio'] for r in chain}):
+        mine = [r for r in chain if r['mass_ratio'] == ratio and r['curve'] == 'xpbd']
+        totals = sorted({int(r['passes']) for r in mine})
+        panels.append((mine, 'end_drop', totals,
+                       'chain, end mass 1:%g, xpbd' % ratio, 'drop of the end mass (m)'))
+    for curve in ('xpbd', 'bullet'):
+        mine = [r for r in hanging if r['curve'] == curve]
+        totals = [t for t in (4, 16, 64) if any(r['passes'] == t for r in mine)]
+        panels.append((mine, 'max_strain', totals, 'hanging cloth, %s' % curve, 'max strain'))
+    panels = [p for p in panels if p[0]]
+    if not panels:
+        return
+    fig, axes = plt.subplots(1, len(panels), figsize=(4.6 * len(panels), 4.4))
+    if len(panels) == 1:
+        axes = [axes]
+    for ax, (mine, metric, totals, title, ylabel) in zip(axes, panels):
+        substeps_panel(ax, mine, metric, totals, title, ylabel)
+    fig.suptitle('Substeps against iterations at equal cost (layout of Small Steps figs. 3-4): '
+                 'error at a fixed number of constraint passes per step', fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+# --- Stability matrix -----------------------------------------------------------------------------
+
+def stability_verdicts(rows):
+    """Adds 'stable' to every run: finite, exited normally, energy bounded by E0 + 10 M g L."""
+    starts = {}
+    for r in rows:
+        if r.get('level') == 'start':
+            starts[(r.get('panel') or 'chain', r['mass_ratio'] if r.get('panel') != 'ordering'
+                    else 'cloth')] = r['energy']
+    for r in rows:
+        if r.get('level') == 'start':
+            continue
+        panel = r.get('panel') or 'chain'
+        if panel == 'ordering':
+            e0 = starts.get(('ordering', 'cloth'), float('nan'))
+            scale = 0.5 * G * 1.0  # the 10 x 10 cloth: 0.5 kg, 1 m
+        else:
+            e0 = starts.get(('chain', r['mass_ratio']), float('nan'))
+            scale = (19.0 + r['mass_ratio']) * G * 0.19
+        gain = (r['energy'] - e0) / scale
+        r['energy_gain'] = gain
+        r['stable'] = r['ok'] and math.isfinite(gain) and gain < BOUNDED_ENERGY
+    return [r for r in rows if r.get('level') != 'start']
+
+
+def heat_panel(ax, fig, rows, row_keys, col_keys, row_label, col_label, title, analytic=None):
+    import numpy as np
+    values = np.full((len(row_keys), len(col_keys)), np.nan)
+    unstable = np.zeros((len(row_keys), len(col_keys)), dtype=bool)
+    missing = np.ones((len(row_keys), len(col_keys)), dtype=bool)
+    for r in rows:
+        rk, ck = row_label(r), col_label(r)
+        if rk not in row_keys or ck not in col_keys:
+            continue
+        a, b = row_keys.index(rk), col_keys.index(ck)
+        missing[a, b] = False
+        if r['stable']:
+            values[a, b] = max(r['max_strain'], 1e-9)
+        else:
+            unstable[a, b] = True
+    finite = values[np.isfinite(values)]
+    norm = LogNorm(vmin=max(1e-6, finite.min()) if finite.size else 1e-6,
+                   vmax=max(finite.max(), 1e-5) if finite.size else 1.0)
+    image = ax.imshow(np.ma.masked_invalid(values), cmap='viridis', norm=norm, aspect='auto')
+    for a in range(len(row_keys)):
+        for b in range(len(col_keys)):
+            if unstable[a, b]:
+                ax.add_patch(plt.Rectangle((b - 0.5, a - 0.5), 1, 1, color='black'))
+                ax.text(b, a, 'unstable', ha='center', va='center', color='white', fontsize=5.5)
+            elif missing[a, b]:
+                ax.text(b, a, '-', ha='center', va='center', color='gray', fontsize=6)
+            elif np.isfinite(values[a, b]):
+                ax.text(b, a, '%.0e' % values[a, b], ha='center', va='center', fontsize=5.5,
+                        color='white' if norm(values[a, b]) < 0.5 else 'black')
+            if analytic and analytic(row_keys[a], col_keys[b]):
+                ax.add_patch(plt.Rectangle((b - 0.46, a - 0.46), 0.92, 0.92, fill=False,
+                                           edgecolor='red', linewidth=1.2))
+    ax.set_xticks(range(len(col_keys)))
+    ax.set_xticklabels(['\n'.join(str(x) for x in k) for k in col_keys], fontsize=6.5)
+    ax.set_yticks(range(len(row_keys)))
+    ax.set_yticklabels([' '.join(str(x) for x in k) for k in row_keys], fontsize=6.5)
+    ax.set_title(title, fontsize=9)
+    fig.colorbar(image, ax=ax, fraction=0.03, pad=0.01).set_label(
+        'max strain over the run (stable runs)', fontsize=7)
+
+
+def stability_figure(rows, path):
+    chain = [r for r in rows if (r.get('panel') or 'chain') == 'chain']
+    ordering = [r for r in rows if r.get('panel') == 'ordering']
+    order = ['verlet', 'pbd', 'xpbd', 'mass_spring', 'bullet']
+    levels = {}
+    for r in chain:
+        levels.setdefault(r['method'], [])
+        if r['level'] not in levels[r['method']]:
+            levels[r['method']].append(r['level'])
+    row_keys = [(m, lv, 'it=%d' % it) for m in order if m in levels for lv in levels[m]
+                for it in sorted({int(r['iterations']) for r in chain})]
+    col_keys = [('1:%g' % ratio, 'dt=1/%d' % (60 * s))
+                for ratio in sorted({r['mass_ratio'] for r in chain})
+                for s in sorted({int(r['substeps']) for r in chain})]
+
+    def analytic_unstable(row_key, col_key):
+        # Case 8: explicit springs diverge when w_max dt >= 2, w_max^2 = 4 k / (1 kg) on the chain.
+        if row_key[0] != 'mass_spring':
+            return False
+        k = float(row_key[1].split('=')[1])
+        dt = 1.0 / float(col_key[1].split('/')[1])
+        return 2.0 * math.sqrt(k) * dt >= 2.0
+
+    fig, axes = plt.subplots(1, 2, figsize=(15, 9), gridspec_kw={'width_ratios': [3, 1.1]})
+    heat_panel(ax=axes[0], fig=fig, rows=chain, row_keys=row_keys, col_keys=col_keys,
+               row_label=lambda r: (r['method'], r['level'], 'it=%d' % r['iterations']),
+               col_label=lambda r: ('1:%g' % r['mass_ratio'], 'dt=1/%d' % (60 * r['substeps'])),
+               title='heavy chain (config/chain_heavy.yaml, hanging at rest, 2 s): method x '
+                     'stiffness x iterations (rows), end mass ratio x substep dt (columns)\n'
+                     'red frame: unstable by the analytic limit w_max dt >= 2 (case 8)',
+               analytic=analytic_unstable)
+    if ordering:
+        o_rows = [('xpbd', lv, 'it=%d' % it) for lv in ('gauss_seidel', 'jacobi, averaged',
+                                                          'jacobi, plain')
+                  for it in sorted({int(r['iterations']) for r in ordering})]
+        o_cols = [('dt=1/%d' % (60 * s),) for s in sorted({int(r['substeps']) for r in ordering})]
+        heat_panel(ax=axes[1], fig=fig, rows=ordering, row_keys=o_rows, col_keys=o_cols,
+                   row_label=lambda r: ('xpbd', r['level'], 'it=%d' % r['iterations']),
+                   col_label=lambda r: ('dt=1/%d' % (60 * r['substeps']),),
+                   title='ordering, 10 x 10 hanging cloth (2 s):\nplain Jacobi diverges '
+                         '(K >= 3 constraints, case 7)')
+    else:
+        axes[1].axis('off')
+    fig.suptitle('Stability matrix: stable = finite and energy below E0 + 10 M g L; colour = '
+                 'max strain of the stable runs (log)', fontsize=11)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+# --- Summary --------------------------------------------------------------------------------------
+
+def cheapest(rows, curve, metric, target):
+    meeting = [r for r in rows if r['curve'] == curve and converged_run(r) and r[metric] <= target]
+    return min(meeting, key=lambda r: r['wall_ms_per_step']) if meeting else None
+
+
+def best(rows, curve, metric):
+    mine = [r for r in rows if r['curve'] == curve and converged_run(r)]
+    return min(mine, key=lambda r: (r[metric], r['wall_ms_per_step'])) if mine else None
+
+
+def fmt_ms(value):
+    return '%.3g ms' % value
+
+
+def read_microbench(path):
+    if not os.path.exists(path):
+        return []
+    with open(path, newline='') as handle:
+        lines = handle.read().splitlines()
+    # Google Benchmark writes its context before the CSV header.
+    start = next((k for k, line in enumerate(lines) if line.startswith('name,')), None)
+    if start is None:
+        return []
+    return list(csv.DictReader(lines[start:]))
+
+
+def summary(data_dir, hanging, drape, chain, stability, env_text):
+    out = []
+    add = out.append
+    add('# Bench summary')
+    add('')
+    add('Generated by `scripts/run_bench` (sweeps: `scripts/bench_sweep.py`; charts and this file: '
+        '`scripts/plot_bench.py`). Every figure below comes from the CSVs of that one run, each '
+        'row of which holds the exact command line that produced it.')
+    if env_text:
+        add('')
+        add('```')
+        add(env_text.strip())
+        add('```')
+    add('')
+    add('Wall time per step is the mean over the run of the step calls only (metrics excluded), '
+        'one thread. max_strain is the largest |l - l0| / l0 over the stretch links at any step '
+        'of the run (transients included), mean_strain that of the final state; Bullet is '
+        'measured on the same links with the same code (`pbd_cloth::computeStrain`).')
+
+    if hanging:
+        add('')
+        add('## Hanging cloth (config/hanging.yaml, 50 x 50, 3 s): our cost against Bullet\'s')
+        add('')
+        add('Cheapest run of each curve whose max strain is at most the target '
+            '(wall ms per step, and its setting). Ratio = ours / Bullet (below 1: we are cheaper).')
+        add('')
+        targets = [1.0, 0.5, 0.2, 0.1, 0.05, 0.02, 0.01]
+        ours = ['xpbd', 'xpbd, no bending', 'xpbd + tethers']
+        peers = ['bullet', 'bullet + bending links']
+        present = [c for c in ours + peers if any(r['curve'] == c for r in hanging)]
+        add('| max strain <= | ' + ' | '.join(present) + ' | xpbd / bullet | '
+            'xpbd no bending / bullet |')
+        add('|---|' + '---|' * (len(present) + 2))
+        for target in targets:
+            cells, costs = [], {}
+            for curve in present:
+                run = cheapest(hanging, curve, 'max_strain', target)
+                costs[curve] = run['wall_ms_per_step'] if run else None
+                cells.append('%s (%dx%d)' % (fmt_ms(run['wall_ms_per_step']), run['substeps'],
+                                             run['iterations']) if run else 'not reached')
+
+            def ratio(a, b):
+                if costs.get(a) and costs.get(b):
+                    return '%.2f' % (costs[a] / costs[b])
+                return '-'
+            add('| %g | %s | %s | %s |' % (target, ' | '.join(cells), ratio('xpbd', 'bullet'),
+                                           ratio('xpbd, no bending', 'bullet')))
+        add('')
+        add('(N x M = substeps x iterations; for Bullet internal steps x position iterations.)')
+        add('')
+        add('Best max strain each curve reaches in the sweep:')
+        add('')
+        add('| curve | best max strain | mean strain | wall ms per step | setting |')
+        add('|---|---|---|---|---|')
+        for curve in curves_of(hanging):
+            run = best(hanging, curve, 'max_strain')
+            if run:
+                add('| %s | %.3g | %.3g | %.3g | `%s` |' % (
+                    curve, run['max_strain'], run['mean_strain'], run['wall_ms_per_step'],
+                    setting(run)))
+        # At equal max strain: Bullet's best against the cheapest xpbd that matches it.
+        bullet_best = best(hanging, 'bullet', 'max_strain')
+        if bullet_best:
+            add('')
+            for curve in ('xpbd', 'xpbd, no bending', 'xpbd + tethers'):
+                match = cheapest(hanging, curve, 'max_strain', bullet_best['max_strain'])
+                if match:
+                    add('- At Bullet\'s best max strain (%.3g, %.3g ms): %s reaches %.3g at '
+                        '%.3g ms, cost ratio ours / Bullet = **%.2f**.' % (
+                            bullet_best['max_strain'], bullet_best['wall_ms_per_step'], curve,
+                            match['max_strain'], match['wall_ms_per_step'],
+                            match['wall_ms_per_step'] / bullet_best['wall_ms_per_step']))
+                else:
+                    ours_best = best(hanging, curve, 'max_strain')
+                    if ours_best:
+                        add('- %s does not reach Bullet\'s best max strain %.3g in the sweep; '
+                            'its best is %.3g at %.3g ms.' % (curve, bullet_best['max_strain'],
+                                                             ours_best['max_strain'],
+                                                             ours_best['wall_ms_per_step']))
+        diverged = [r for r in hanging if not converged_run(r)]
+        if diverged:
+            add('')
+            add('Diverged runs (non-finite or links over %g x rest length): %s.' % (
+                DIVERGED_STRAIN, ', '.join('%s %dx%d' % (r['curve'], r['substeps'],
+                                                         r['iterations']) for r in diverged)))
+
+        add('')
+        add('## Cheapest setting per method for max strain <= 1 % on hanging.yaml')
+        add('')
+        add('| curve | cheapest run meeting 1 % | max strain | mean strain | wall ms per step | '
+            'cloth_bench --set ... |')
+        add('|---|---|---|---|---|---|')
+        for curve in curves_of(hanging):
+            run = cheapest(hanging, curve, 'max_strain', TARGET)
+            if run:
+                add('| %s | %dx%d | %.3g | %.3g | %.3g | `%s` |' % (
+                    curve, run['substeps'], run['iterations'], run['max_strain'],
+                    run['mean_strain'], run['wall_ms_per_step'], setting(run)))
+            else:
+                near = best(hanging, curve, 'max_strain')
+                add('| %s | not reached in the sweep | best %s | | %s | `%s` |' % (
+                    curve, '%.3g' % near['max_strain'] if near else '-',
+                    '%.3g' % near['wall_ms_per_step'] if near else '-',
+                    setting(near) if near else ''))
+        add('')
+        add('Mean strain <= 1 %:')
+        add('')
+        add('| curve | cheapest run | mean strain | max strain | wall ms per step |')
+        add('|---|---|---|---|---|')
+        for curve in curves_of(hanging):
+            run = cheapest(hanging, curve, 'mean_strain', TARGET)
+            if run:
+                add('| %s | %dx%d | %.3g | %.3g | %.3g |' % (
+                    curve, run['substeps'], run['iterations'], run['mean_strain'],
+                    run['max_strain'], run['wall_ms_per_step']))
+            else:
+                add('| %s | not reached | | | |' % curve)
+
+    if drape:
+        add('')
+        add('## Drape (config/drape.yaml, 32 x 32 on a ball and table, 3 s)')
+        add('')
+        add('| curve | cheapest run with max strain <= 10 % | max penetration (m) | '
+            'self-intersections at the end | wall ms per step |')
+        add('|---|---|---|---|---|')
+        for curve in curves_of(drape):
+            run = cheapest(drape, curve, 'max_strain', 0.1)
+            if run:
+                add('| %s | %dx%d (max strain %.3g) | %.3g | %s | %.3g |' % (
+                    curve, run['substeps'], run['iterations'], run['max_strain'],
+                    run['max_penetration'], run.get('self_intersections'),
+                    run['wall_ms_per_step']))
+            else:
+                near = best(drape, curve, 'max_strain')
+                add('| %s | not reached (best %s) | | | |' % (
+                    curve, '%.3g' % near['max_strain'] if near else '-'))
+        if any(r['curve'] == 'bullet' for r in drape):
+            add('')
+            add('Bullet runs the drape without cloth self-collision (it needs clusters for that), '
+                'so its self-intersection count is not comparable.')
+
+    if chain:
+        add('')
+        add('## Heavy chain (config/chain_heavy.yaml, 10 s): substeps against iterations')
+        add('')
+        add('Drop of the end mass below its rest position, equal number of passes per step '
+            '(REFERENCE_CASES case 5; Small Steps reports ~322 m with 100 iterations against '
+            '~3.2 m with 100 substeps at 1:1e5 over its own run length).')
+        add('')
+        add('| curve | end mass | passes | all substeps | all iterations | ratio |')
+        add('|---|---|---|---|---|---|')
+        for curve in ('xpbd', 'pbd', 'bullet'):
+            for ratio in sorted({r['mass_ratio'] for r in chain}):
+                mine = [r for r in chain if r['curve'] == curve and r['mass_ratio'] == ratio
+                        and r['ok']]
+                for total in sorted({r['passes'] for r in mine}):
+                    subs = [r for r in mine if r['passes'] == total and r['iterations'] == 1]
+                    its = [r for r in mine if r['passes'] == total and r['substeps'] == 1]
+                    if total < 16 or not subs or not its:
+                        continue
+                    a, b = abs(subs[0]['end_drop']), abs(its[0]['end_drop'])
+                    add('| %s | 1:%g | %d | %.3g m | %.3g m | %s |' % (
+                        curve, ratio, total, a, b, '%.0fx' % (b / a) if a > 0 else '-'))
+
+    if stability:
+        add('')
+        add('## Stability matrix (doc/stability_matrix.png)')
+        add('')
+        add('| method | runs | unstable | unstable cells |')
+        add('|---|---|---|---|')
+        for method in ('verlet', 'pbd', 'xpbd', 'mass_spring', 'bullet'):
+            mine = [r for r in stability if r['method'] == method
+                    and (r.get('panel') or 'chain') == 'chain']
+            bad = [r for r in mine if not r['stable']]
+            cells = ', '.join(sorted({'%s ratio 1:%g dt 1/%d' % (r['level'], r['mass_ratio'],
+                                                                 60 * r['substeps'])
+                                      for r in bad}))
+            add('| %s | %d | %d | %s |' % (method, len(mine), len(bad), cells or '-'))
+        springs = [r for r in stability if r['method'] == 'mass_spring']
+        agree = sum(1 for r in springs if r['stable'] == (
+            2.0 * math.sqrt(float(r['level'].split('=')[1])) / (60 * r['substeps']) < 2.0))
+        if springs:
+            add('')
+            add('mass_spring: %d of %d runs agree with the analytic limit w_max dt < 2 '
+                '(w_max^2 = 4 k / m on the chain).' % (agree, len(springs)))
+        ordering = [r for r in stability if r.get('panel') == 'ordering']
+        for level in ('gauss_seidel', 'jacobi, averaged', 'jacobi, plain'):
+            mine = [r for r in ordering if r['level'] == level]
+            if mine:
+                add('- 10 x 10 cloth, xpbd %s: %d of %d runs stable.' % (
+                    level, sum(1 for r in mine if r['stable']), len(mine)))
+
+    micro = read_microbench(os.path.join(data_dir, 'microbench.csv'))
+    if micro:
+        add('')
+        add('## Microbenchmarks (test/bench/microbench.cpp, doc/microbench.csv)')
+        add('')
+        add('| benchmark | time per iteration | count | ns per item | item |')
+        add('|---|---|---|---|---|')
+        for row in micro:
+            per = row.get('ns_per_item') or ''
+            add('| %s | %.4g %s | %s | %s | %s |' % (
+                row['name'].replace('/manual_time', ''), number(row.get('real_time')),
+                row.get('time_unit', ''), '%.0f' % number(row.get('count')),
+                '%.3g' % number(per) if per else '', row.get('label', '')))
+    return '\n'.join(out) + '\n'
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument('--data', default=os.path.join(REPO, 'doc'))
+    parser.add_argument('--env', default=None, help='text file about the run (machine, load)')
+    args = parser.parse_args()
+    data = args.data
+    hanging = load(os.path.join(data, 'sweep_hanging.csv'))
+    drape = load(os.path.join(data, 'sweep_drape.csv'))
+    chain = load(os.path.join(data, 'sweep_chain.csv'))
+    stability = load(os.path.join(data, 'sweep_stability.csv'))
+    if not (hanging or drape or chain or stability):
+        sys.exit('plot_bench: no sweep_*.csv in %s (run scripts/run_bench first)' % data)
+    written = []
+    if hanging:
+        path = os.path.join(data, 'pareto_hanging.png')
+        pareto_figure(hanging, [('max_strain', 'max strain over the run', TARGET),
+                                ('mean_strain', 'mean strain at the end', TARGET)],
+                      'config/hanging.yaml (50 x 50, 1 m, two pinned corners, 3 s at 60 Hz): '
+                      'cost against stretch error, pbd_cloth and Bullet on the same links', path)
+        written.append(path)
+    if drape:
+        path = os.path.join(data, 'pareto_drape.png')
+        pareto_figure(drape, [('max_strain', 'max strain over the run', TARGET),
+                              ('mean_strain', 'mean strain at the end', TARGET),
+                              ('max_penetration', 'max penetration over the run (m)', None)],
+                      'config/drape.yaml (32 x 32 on a ball and a table, 3 s at 60 Hz)', path)
+        written.append(path)
+    if chain:
+        path = os.path.join(data, 'pareto_chain.png')
+        chain_figure(chain, path)
+        written.append(path)
+    if hanging or chain:
+        path = os.path.join(data, 'substeps_vs_iterations.png')
+        substeps_figure(hanging, chain, path)
+        written.append(path)
+    verdicts = stability_verdicts(stability) if stability else []
+    if verdicts:
+        path = os.path.join(data, 'stability_matrix.png')
+        stability_figure(verdicts, path)
+        written.append(path)
+    env_text = ''
+    if args.env and os.path.exists(args.env):
+        with open(args.env) as handle:
+            env_text = handle.read()
+    text = summary(data, hanging, drape, chain, verdicts, env_text)
+    path = os.path.join(data, 'bench_summary.md')
+    with open(path, 'w') as handle:
+        handle.write(text)
+    written.append(path)
+    print(text)
+    for path in written:
+        print('plot_bench: wrote %s' % os.path.relpath(path, REPO))
+
+
+if __name__ == '__main__':
+    main()

@@ -1,0 +1,82 @@
+#include "pbd_cloth/ros/cloth_diagnostics.h"
+
+#include <algorithm>
+
+#include <diagnostic_msgs/DiagnosticStatus.h>
+
+namespace pbd_cloth {
+
+using diagnostic_msgs::DiagnosticStatus;
+
+ClothDiagnostics::ClothDiagnostics(const ros::NodeHandle& nh, const ros::NodeHandle& nh_private,
+                                   const std::string& node_name, const Config& config)
+    : config_(config), updater_(nh, nh_private, node_name) {
+  // A simulator has no hardware; "none" is diagnostic_updater's convention for that.
+  updater_.setHardwareID("none");
+  updater_.add("simulation", this, &ClothDiagnostics::simulationStatus);
+  updater_.add("inputs", this, &ClothDiagnostics::inputStatus);
+}
+
+void ClothDiagnostics::addStep(double step_wall_time) {
+  ++step_count_;
+  step_time_sum_ += step_wall_time;
+  step_time_max_ = std::max(step_time_max_, step_wall_time);
+}
+
+void ClothDiagnostics::report(const SimulationHealth& health, const InputRejections& rejections) {
+  health_ = health;
+  rejections_ = &rejections;
+  updater_.force_update();
+  rejections_ = nullptr;
+  step_count_ = 0;
+  step_time_sum_ = 0.0;
+  step_time_max_ = 0.0;
+}
+
+void ClothDiagnostics::simulationStatus(diagnostic_updater::DiagnosticStatusWrapper& status) {
+  const double mean_step = step_count_ > 0 ? step_time_sum_ / step_count_ : 0.0;
+  const bool slow_rate =
+      health_.real_time_factor_valid && health_.real_time_factor < config_.min_real_time_factor;
+  const bool slow_steps = mean_step > health_.step_period;
+  if (!health_.finite) {
+    status.summary(DiagnosticStatus::ERROR,
+                   "the simulation diverged (non-finite positions): ~state is not published; "
+                   "call ~reset");
+  } else if (slow_rate || slow_steps) {
+    status.summaryf(DiagnosticStatus::WARN,
+                    "cannot keep real time: real-time factor %.2f, a step takes %.1f ms for a "
+                    "period of %.1f ms (lower step_rate, substeps or the cloth size)",
+                    health_.real_time_factor, 1e3 * mean_step, 1e3 * health_.step_period);
+  } else {
+    status.summary(DiagnosticStatus::OK, "keeping real time");
+  }
+  status.add("sim time (s)", health_.sim_time);
+  status.add("real-time factor", health_.real_time_factor);
+  status.add("steps since last report", step_count_);
+  status.add("mean step time (ms)", 1e3 * mean_step);
+  status.add("max step time (ms)", 1e3 * step_time_max_);
+  status.add("step period (ms)", 1e3 * health_.step_period);
+  status.add("substeps", health_.substeps);
+  status.add("iterations (last step)", health_.iterations);
+  status.add("max strain", health_.max_strain);
+  status.add("max penetration (m)", health_.max_penetration);
+}
+
+void ClothDiagnostics::inputStatus(diagnostic_updater::DiagnosticStatusWrapper& status) {
+  const std::uint32_t total = rejections_->total();
+  const std::uint32_t recent = total - rejected_at_last_report_;
+  rejected_at_last_report_ = total;
+  if (recent > 0) {
+    status.summaryf(DiagnosticStatus::WARN, "%u input(s) rejected since the last report; last: %s",
+                    recent, rejections_->last().c_str());
+  } else {
+    status.summary(DiagnosticStatus::OK, "no input rejected since the last report");
+  }
+  status.add("rejected inputs", total);
+  for (const auto& count : rejections_->countsByReason()) {
+    status.add(std::string("rejected: ") + toString(count.first), count.second);
+  }
+  status.add("last rejection", rejections_->last());
+}
+
+}  // namespace pbd_cloth
