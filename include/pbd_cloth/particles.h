@@ -40,7 +40,8 @@ struct DistanceConstraint {
 // Isometric bending (Bergou et al. 2006, "A quadratic bending model for inextensible surfaces";
 // Wardetzky et al. 2007 cotangent weights) on the hinge of two triangles (x0,x1,x2) and (x0,x1,x3)
 // sharing edge x0-x1. The mean-curvature vector b = sum_k K_k x_k vanishes on the flat rest state;
-// the bending energy is E = 3/(A0+A1) |b|^2 and the constraint is C = sqrt(2E) = scale * |b| = 0.
+// the bending energy is E = 3/(A0+A1) |b|^2 = |C|^2 / 2 with the vector constraint C = scale * b = 0,
+// linear in the positions (solver.cpp, projectBend).
 struct BendConstraint {
   int index[4] = {0, 0, 0, 0};
   double weight[4] = {0.0, 0.0, 0.0, 0.0};  // K_k, sum zero

@@ -53,7 +53,8 @@ struct SolverConfig {
   double bend_stiffness = 0.1;                         // solver.bend_stiffness, pbd only, [0,1]
   double spring_stiffness = 1.0e4;                     // solver.spring_stiffness (N/m), mass_spring
   double spring_damping = 0.0;                         // solver.spring_damping (N s/m), mass_spring
-  double bend_spring_stiffness = 1.0;                  // solver.bend_spring_stiffness, mass_spring
+  // 0.01: on the 50 x 50 hanging cloth 1.0 already diverges at 240 substeps (scripts/method_table).
+  double bend_spring_stiffness = 0.01;                 // solver.bend_spring_stiffness, mass_spring
 };
 
 struct FrictionConfig {

@@ -65,7 +65,7 @@ class Solver {
   double stretch_compliance_ = 0.0;
   double bend_compliance_ = -1.0;
   std::vector<double> stretch_lambda_;  // XPBD multipliers, reset every substep
-  std::vector<double> bend_lambda_;
+  Vec3Array bend_lambda_;              // one vector per hinge: C = scale b is vector-valued
   Vec3Array jacobi_delta_;         // Jacobi: summed corrections per particle
   std::vector<int> jacobi_count_;  // Jacobi: stretch and bend constraints on each free particle
   Vec3Array force_;                // mass_spring: force accumulator

@@ -42,7 +42,7 @@ void Solver::configure(const SolverConfig& solver, const ClothConfig& cloth) {
 void Solver::prepare(const Particles& particles, const ClothTopology& topology) {
   const int n = particles.size();
   stretch_lambda_.assign(topology.stretch.size(), 0.0);
-  bend_lambda_.assign(topology.bend.size(), 0.0);
+  bend_lambda_.assign(topology.bend.size(), Vec3::Zero());
   jacobi_delta_.assign(n, Vec3::Zero());
   jacobi_count_.assign(n, 0);
   force_.assign(n, Vec3::Zero());
@@ -157,24 +157,28 @@ double Solver::projectBend(double h, Particles& p, const ClothTopology& topology
   const int count = static_cast<int>(topology.bend.size());
   for (int c = 0; c < count; ++c) {
     const BendConstraint& con = topology.bend[c];
-    const Vec3 b = bendVector(con, p);
     double w = 0.0;
     for (int v = 0; v < 4; ++v) {
       w += p.inverse_mass[con.index[v]] * con.weight[v] * con.weight[v];
     }
-    const double b_norm = b.norm();
     w *= con.scale * con.scale;
-    if (b_norm < kMinLength || w < kMinInverseMass) continue;
-    const double constraint = con.scale * b_norm;
-    double dlambda =
-        xpbd ? (-constraint - alpha * bend_lambda_[c]) / (w + alpha) : -k * constraint / w;
+    if (w < kMinInverseMass) continue;
+    // The vector constraint C = scale b (three rows, each with gradient scale K_k per vertex) has
+    // the same energy as scale |b| but is linear in the positions: one projection solves it
+    // exactly, and the multiplier is a vector, so a hinge that swings through flat keeps the
+    // direction of its accumulated force instead of flipping the sign of a scalar lambda (the
+    // whip of free edges with stiff bending). XPBD: dlambda = (-C - alpha lambda) / (w + alpha)
+    // (Macklin et al. 2016, eq. 18), row by row with the common w.
+    const Vec3 constraint = con.scale * bendVector(con, p);
+    Vec3 dlambda = xpbd ? Vec3((-constraint - alpha * bend_lambda_[c]) / (w + alpha))
+                        : Vec3((-k / w) * constraint);
     if (average) {
       dlambda *= std::min(jacobiScale(con.index[0], con.index[1]),
                           jacobiScale(con.index[2], con.index[3]));
     }
     bend_lambda_[c] += dlambda;
-    const Vec3 direction = (dlambda * con.scale / b_norm) * b;
-    // |dx_k| = w_k |K_k| |direction|, and |direction| = |dlambda| scale: no square root per vertex.
+    const Vec3 direction = con.scale * dlambda;
+    // |dx_k| = w_k |K_k| |direction|: one norm per hinge, not per vertex.
     double largest_weight = 0.0;
     for (int v = 0; v < 4; ++v) {
       const int i = con.index[v];
@@ -186,7 +190,7 @@ double Solver::projectBend(double h, Particles& p, const ClothTopology& topology
         p.position[i] += factor * direction;
       }
     }
-    max_change = std::max(max_change, largest_weight * std::abs(dlambda) * con.scale);
+    max_change = std::max(max_change, largest_weight * direction.norm());
   }
   return max_change;
 }
@@ -374,7 +378,7 @@ void Solver::massSpringSubstep(double h, double s_end, Particles& p, const Cloth
     // Bending springs on the isometric energy E = k_b / 2 scale^2 |b|^2: F_k = -k_b scale^2 K_k b.
     for (const BendConstraint& con : topology.bend) {
       const Vec3 b = bendVector(con, p);
-      if (b.norm() < kMinLength) continue;  // flat: no force but rounding noise (as projectBend)
+      if (b.norm() < kMinLength) continue;  // flat: no force but rounding noise
       const Vec3 f = -config_.bend_spring_stiffness * con.scale * con.scale * b;
       for (int v = 0; v < 4; ++v) force_[con.index[v]] += con.weight[v] * f;
     }
@@ -431,7 +435,7 @@ void Solver::step(double dt, Particles& p, const ClothTopology& topology, Collis
 
     // XPBD multipliers start at zero every substep (Small Steps, Algorithm 1).
     std::fill(stretch_lambda_.begin(), stretch_lambda_.end(), 0.0);
-    std::fill(bend_lambda_.begin(), bend_lambda_.end(), 0.0);
+    std::fill(bend_lambda_.begin(), bend_lambda_.end(), Vec3::Zero());
     for (int pass = 0; pass < config_.iterations; ++pass) {
       ++stats_.iterations;
       const double max_change = projectPass(h, p, topology, collisions, pass == 0);
