@@ -11,9 +11,10 @@ struct Metrics {
   double max_penetration = 0.0;  // m, deepest contact violation (obstacles, particles, cloth)
   int self_intersections = 0;    // edge-triangle crossings not sharing a vertex; -1 when !finite
   double kinetic_energy = 0.0;   // J
-  double potential_energy = 0.0; // J, gravity relative to z = 0 (plus elastic energy of XPBD springs)
-  double energy = 0.0;           // J, kinetic + potential
-  bool finite = true;            // every position and velocity finite
+  double potential_energy =
+      0.0;              // J, gravity relative to z = 0 (plus elastic energy of XPBD springs)
+  double energy = 0.0;  // J, kinetic + potential
+  bool finite = true;   // every position and velocity finite
 };
 
 // Strain over the stretch constraints: |l - l0| / l0.

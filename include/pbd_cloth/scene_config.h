@@ -40,21 +40,21 @@ struct Pose {
 };
 
 struct SolverConfig {
-  Method method = Method::kXpbd;                       // solver.method
-  int substeps = 10;                                   // solver.substeps, per step
-  int iterations = 1;                                  // solver.iterations, passes per substep
-  double tolerance = 0.0;                              // solver.tolerance (m); > 0: adaptive
-  Ordering ordering = Ordering::kGaussSeidel;          // solver.ordering
-  double relaxation = 1.0;                             // solver.relaxation, Jacobi factor in (0,2)
-  bool jacobi_averaging = true;                        // solver.jacobi_averaging (eq. 48 survey)
-  Eigen::Vector3d gravity{0.0, 0.0, -9.81};            // solver.gravity (m/s^2)
-  double damping = 0.0;                                // solver.damping (1/s)
-  double stretch_stiffness = 1.0;                      // solver.stretch_stiffness, pbd only, [0,1]
-  double bend_stiffness = 0.1;                         // solver.bend_stiffness, pbd only, [0,1]
-  double spring_stiffness = 1.0e4;                     // solver.spring_stiffness (N/m), mass_spring
-  double spring_damping = 0.0;                         // solver.spring_damping (N s/m), mass_spring
+  Method method = Method::kXpbd;               // solver.method
+  int substeps = 10;                           // solver.substeps, per step
+  int iterations = 1;                          // solver.iterations, passes per substep
+  double tolerance = 0.0;                      // solver.tolerance (m); > 0: adaptive
+  Ordering ordering = Ordering::kGaussSeidel;  // solver.ordering
+  double relaxation = 1.0;                     // solver.relaxation, Jacobi factor in (0,2)
+  bool jacobi_averaging = true;                // solver.jacobi_averaging (eq. 48 survey)
+  Eigen::Vector3d gravity{0.0, 0.0, -9.81};    // solver.gravity (m/s^2)
+  double damping = 0.0;                        // solver.damping (1/s)
+  double stretch_stiffness = 1.0;              // solver.stretch_stiffness, pbd only, [0,1]
+  double bend_stiffness = 0.1;                 // solver.bend_stiffness, pbd only, [0,1]
+  double spring_stiffness = 1.0e4;             // solver.spring_stiffness (N/m), mass_spring
+  double spring_damping = 0.0;                 // solver.spring_damping (N s/m), mass_spring
   // 0.01: on the 50 x 50 hanging cloth 1.0 already diverges at 240 substeps (scripts/method_table).
-  double bend_spring_stiffness = 0.01;                 // solver.bend_spring_stiffness, mass_spring
+  double bend_spring_stiffness = 0.01;  // solver.bend_spring_stiffness, mass_spring
 };
 
 struct FrictionConfig {
@@ -63,29 +63,29 @@ struct FrictionConfig {
 };
 
 struct ClothConfig {
-  int rows = 32;                                   // cloth.rows
-  int cols = 32;                                   // cloth.cols
-  double spacing = 0.03;                           // cloth.spacing (m)
-  double mass = 0.2;                               // cloth.mass, total (kg)
-  Eigen::Vector3d origin{0.0, 0.0, 1.0};           // cloth.origin, particle (0,0)
-  Eigen::Vector3d rpy{0.0, 0.0, 0.0};              // cloth.rpy (rad)
-  double stretch_compliance = 0.0;                 // cloth.stretch_compliance (m/N)
-  double bend_compliance = 1.0e-3;                 // cloth.bend_compliance; < 0 disables bending
-  double thickness = 0.005;                        // cloth.thickness (m)
-  bool self_collision = true;                      // cloth.self_collision
-  FrictionConfig friction;                         // cloth.friction
-  std::vector<int> pinned;                         // cloth.pinned
+  int rows = 32;                                     // cloth.rows
+  int cols = 32;                                     // cloth.cols
+  double spacing = 0.03;                             // cloth.spacing (m)
+  double mass = 0.2;                                 // cloth.mass, total (kg)
+  Eigen::Vector3d origin{0.0, 0.0, 1.0};             // cloth.origin, particle (0,0)
+  Eigen::Vector3d rpy{0.0, 0.0, 0.0};                // cloth.rpy (rad)
+  double stretch_compliance = 0.0;                   // cloth.stretch_compliance (m/N)
+  double bend_compliance = 1.0e-3;                   // cloth.bend_compliance; < 0 disables bending
+  double thickness = 0.005;                          // cloth.thickness (m)
+  bool self_collision = true;                        // cloth.self_collision
+  FrictionConfig friction;                           // cloth.friction
+  std::vector<int> pinned;                           // cloth.pinned
   std::vector<std::pair<int, double>> point_masses;  // cloth.point_masses [[index, kg]]
-  bool tethers = false;                            // cloth.tethers
-  bool shear = true;                               // cloth.shear: diagonal stretch constraints
+  bool tethers = false;                              // cloth.tethers
+  bool shear = true;                                 // cloth.shear: diagonal stretch constraints
 };
 
 struct GranularConfig {
-  int count = 0;                                   // granular.count
-  double radius = 0.01;                            // granular.radius (m)
-  double mass = 0.001;                             // granular.mass, each (kg)
-  Eigen::Vector3d region_min{0.0, 0.0, 1.0};       // granular.region.min
-  Eigen::Vector3d region_max{0.2, 0.2, 1.2};       // granular.region.max
+  int count = 0;                              // granular.count
+  double radius = 0.01;                       // granular.radius (m)
+  double mass = 0.001;                        // granular.mass, each (kg)
+  Eigen::Vector3d region_min{0.0, 0.0, 1.0};  // granular.region.min
+  Eigen::Vector3d region_max{0.2, 0.2, 1.2};  // granular.region.max
 };
 
 struct Waypoint {
@@ -95,9 +95,9 @@ struct Waypoint {
 };
 
 struct GripperConfig {
-  std::string name;                // grippers[i].name
-  double radius = 0.02;            // grippers[i].radius (m)
-  std::string tf_frame;            // grippers[i].tf_frame
+  std::string name;                  // grippers[i].name
+  double radius = 0.02;              // grippers[i].radius (m)
+  std::string tf_frame;              // grippers[i].tf_frame
   std::vector<Waypoint> trajectory;  // grippers[i].trajectory
 };
 
@@ -105,14 +105,14 @@ enum class ShapeType { kSphere, kBox, kCapsule, kPlane };
 const char* toString(ShapeType shape);
 
 struct ObstacleConfig {
-  std::string name;                            // obstacles[i].name
-  ShapeType shape = ShapeType::kSphere;        // obstacles[i].shape
-  double radius = 0.1;                         // sphere, capsule
-  Eigen::Vector3d size{1.0, 1.0, 1.0};         // box: full edge lengths
-  double length = 0.5;                         // capsule: distance between the end-sphere centres
-  Eigen::Vector3d normal{0.0, 0.0, 1.0};       // plane: unit normal
-  double offset = 0.0;                         // plane: free side is n.p - offset >= 0
-  Pose pose;                                   // obstacles[i].pose
+  std::string name;                       // obstacles[i].name
+  ShapeType shape = ShapeType::kSphere;   // obstacles[i].shape
+  double radius = 0.1;                    // sphere, capsule
+  Eigen::Vector3d size{1.0, 1.0, 1.0};    // box: full edge lengths
+  double length = 0.5;                    // capsule: distance between the end-sphere centres
+  Eigen::Vector3d normal{0.0, 0.0, 1.0};  // plane: unit normal
+  double offset = 0.0;                    // plane: free side is n.p - offset >= 0
+  Pose pose;                              // obstacles[i].pose
 };
 
 struct BoundsConfig {

@@ -76,14 +76,14 @@ class Simulation {
 
  private:
   struct GripperState {
-    Pose pose;             // pose at the end of the last step
-    Pose target;           // pose at the end of the next step
-    bool live = false;     // a pose message arrived: the trajectory is no longer followed
+    Pose pose;          // pose at the end of the last step
+    Pose target;        // pose at the end of the next step
+    bool live = false;  // a pose message arrived: the trajectory is no longer followed
     bool grasping = false;
     std::vector<int> grasped;                    // particle indices
     std::vector<Eigen::Vector3d> local_offsets;  // grasped particle positions in the gripper frame
     Eigen::Vector3d velocity = Eigen::Vector3d::Zero();
-    std::size_t next_waypoint = 0;               // first waypoint whose grasp event is pending
+    std::size_t next_waypoint = 0;  // first waypoint whose grasp event is pending
   };
 
   void build();

@@ -24,6 +24,9 @@ struct StepStats {
   double collide_time = 0.0;
   double project_time = 0.0;
   double update_time = 0.0;
+  // Of project_time: the contact projections (particle-particle, self-collision, obstacles,
+  // bounds, with friction), i.e. the collisions' narrow phase.
+  double contact_time = 0.0;
 };
 
 class Solver {
@@ -65,8 +68,8 @@ class Solver {
   double stretch_compliance_ = 0.0;
   double bend_compliance_ = -1.0;
   std::vector<double> stretch_lambda_;  // XPBD multipliers, reset every substep
-  Vec3Array bend_lambda_;              // one vector per hinge: C = scale b is vector-valued
-  Vec3Array jacobi_delta_;         // Jacobi: summed corrections per particle
+  Vec3Array bend_lambda_;               // one vector per hinge: C = scale b is vector-valued
+  Vec3Array jacobi_delta_;              // Jacobi: summed corrections per particle
   std::vector<int> jacobi_count_;  // Jacobi: stretch and bend constraints on each free particle
   Vec3Array force_;                // mass_spring: force accumulator
   Vec3Array predicted_;            // x~ = x_prev + h v~ of the current substep (free particles)

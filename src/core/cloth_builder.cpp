@@ -41,9 +41,7 @@ void addTriangles(const ClothConfig& cloth, ClothTopology& topology) {
 
 void addStretch(const ClothConfig& cloth, const Vec3Array& x, ClothTopology& topology) {
   const int rows = cloth.rows, cols = cloth.cols;
-  auto add = [&](int i, int j) {
-    topology.stretch.push_back({i, j, (x[i] - x[j]).norm()});
-  };
+  auto add = [&](int i, int j) { topology.stretch.push_back({i, j, (x[i] - x[j]).norm()}); };
   for (int r = 0; r < rows; ++r) {
     for (int c = 0; c < cols; ++c) {
       const int i = r * cols + c;
@@ -96,7 +94,8 @@ void addBending(const Vec3Array& x, ClothTopology& topology) {
 
 }  // namespace
 
-bool makeBendConstraint(const Vec3Array& rest, int i0, int i1, int i2, int i3, BendConstraint& out) {
+bool makeBendConstraint(const Vec3Array& rest, int i0, int i1, int i2, int i3,
+                        BendConstraint& out) {
   const Vec3 &x0 = rest[i0], &x1 = rest[i1], &x2 = rest[i2], &x3 = rest[i3];
   const Vec3 e0 = x1 - x0, e1 = x2 - x0, e2 = x3 - x0, e3 = x2 - x1, e4 = x3 - x1;
   const double area0 = 0.5 * e0.cross(e1).norm();
@@ -151,9 +150,9 @@ void buildScene(const SceneConfig& scene, Particles& particles, ClothTopology& t
   for (int k = 0; k < granular.count; ++k) {
     const int i = cloth_count + k;
     const int ix = k % nx, iy = (k / nx) % ny, iz = k / (nx * ny);
-    particles.position[i] =
-        granular.region_min + Vec3(granular.radius, granular.radius, granular.radius) +
-        pitch * Vec3(ix, iy, iz);
+    particles.position[i] = granular.region_min +
+                            Vec3(granular.radius, granular.radius, granular.radius) +
+                            pitch * Vec3(ix, iy, iz);
     particles.mass[i] = granular.mass;
     particles.radius[i] = granular.radius;
   }

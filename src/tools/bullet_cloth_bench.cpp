@@ -25,6 +25,7 @@
 #include <btBulletDynamicsCommon.h>
 #pragma GCC diagnostic pop
 
+#include "bench_command_line.h"
 #include "pbd_cloth/cloth_builder.h"
 #include "pbd_cloth/collisions.h"
 #include "pbd_cloth/metrics.h"
@@ -74,9 +75,9 @@ const char kUsage[] =
 constexpr int kLargeScene = 5000;  // particles; above it the metrics are sampled every 10th step
 constexpr double kDivergedStrain = 10.0;  // above it self-intersections are not counted
 
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
+using pbd_cloth::bench::parseCount;
+using pbd_cloth::bench::parseNumber;
+using pbd_cloth::bench::UsageError;
 
 // Bullet's knobs, set with --set bullet.<name>=<value>. Negative means "from the scene".
 struct BulletKnobs {
@@ -90,40 +91,9 @@ struct BulletKnobs {
   double bend_stiffness = 0.5;
 };
 
-struct Options {
-  std::string config;
-  double duration = -1.0;
-  std::vector<std::string> overrides;
+struct Options : pbd_cloth::bench::CommonOptions {
   BulletKnobs bullet;
-  std::string csv;
-  std::string positions;
-  std::string mesh;
-  int sample_every = 0;
-  bool quiet = false;
 };
-
-double parseNumber(const std::string& option, const std::string& text) {
-  std::size_t used = 0;
-  double value = std::numeric_limits<double>::quiet_NaN();
-  try {
-    value = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used == 0 || used != text.size()) {
-    throw UsageError(option + ": expected a number, got '" + text + "'");
-  }
-  return value;
-}
-
-int parseCount(const std::string& key, const std::string& text, int low, int high) {
-  const double value = parseNumber(key, text);
-  if (!(value >= low && value <= high && value == std::floor(value))) {
-    throw UsageError(key + ": must be an integer in [" + std::to_string(low) + ", " +
-                     std::to_string(high) + "], got " + text);
-  }
-  return static_cast<int>(value);
-}
 
 double parseFraction(const std::string& key, const std::string& text, bool zero_allowed,
                      bool one_allowed) {
@@ -165,73 +135,26 @@ void setKnob(BulletKnobs& knobs, const std::string& assignment) {
 }
 
 Options parseArguments(int argc, char** argv) {
+  namespace bench = pbd_cloth::bench;
   Options options;
-  std::vector<std::string> args(argv + 1, argv + argc);
-  for (std::size_t k = 0; k < args.size(); ++k) {
-    std::string option = args[k];
-    std::string value;
-    bool has_value = false;
-    const std::size_t equals = option.find('=');
-    if (option.rfind("--", 0) == 0 && equals != std::string::npos) {
-      value = option.substr(equals + 1);
-      option = option.substr(0, equals);
-      has_value = true;
-    }
-    auto next = [&]() -> std::string {
-      if (has_value) return value;
-      if (k + 1 >= args.size()) throw UsageError(option + " needs a value");
-      return args[++k];
-    };
+  bench::forEachOption(argc, argv, [&](const std::string& option, const bench::NextValue& next) {
     if (option == "--help" || option == "-h") {
       std::cout << kUsage;
       std::exit(0);
-    } else if (option == "--quiet") {
-      options.quiet = true;
-    } else if (option == "--config") {
-      options.config = next();
-    } else if (option == "--duration") {
-      const std::string text = next();
-      options.duration = parseNumber(option, text);
-      if (!std::isfinite(options.duration) || options.duration < 0.0) {
-        throw UsageError("--duration: must be a finite time >= 0 (s), got " + text);
-      }
-    } else if (option == "--set") {
+    }
+    if (option == "--set") {
       const std::string assignment = next();
       if (assignment.rfind("bullet.", 0) == 0) {
         setKnob(options.bullet, assignment);
       } else {
         options.overrides.push_back(assignment);
       }
-    } else if (option == "--csv") {
-      options.csv = next();
-    } else if (option == "--positions") {
-      options.positions = next();
-    } else if (option == "--mesh") {
-      options.mesh = next();
-    } else if (option == "--sample-every") {
-      options.sample_every = parseCount(option, next(), 1, 1000000000);
-    } else {
-      throw UsageError("unknown argument '" + args[k] + "'");
+      return true;
     }
-  }
-  if (options.config.empty()) throw UsageError("--config <scene.yaml> is required");
-  if (options.duration < 0.0) throw UsageError("--duration <s> is required");
+    return bench::parseCommonOption(option, next, options);
+  });
+  bench::requireCommonOptions(options);
   return options;
-}
-
-std::ofstream openOutput(const std::string& option, const std::string& path) {
-  std::ofstream out;
-  if (path.empty()) return out;
-  out.open(path, std::ios::trunc);
-  if (!out) throw UsageError(option + ": cannot write '" + path + "'");
-  out.precision(std::numeric_limits<double>::max_digits10);
-  return out;
-}
-
-void finishOutput(std::ofstream& out, const std::string& path) {
-  if (!out.is_open()) return;
-  out.close();
-  if (!out) throw std::runtime_error("writing '" + path + "' failed");
 }
 
 btVector3 toBullet(const Eigen::Vector3d& v) {
@@ -434,9 +357,9 @@ int run(const Options& options) {
   scene.granular.count = 0;  // the cloth only: Bullet's node i is pbd_cloth's particle i
   if (!options.quiet) warnAboutUnsupported(scene);
 
-  std::ofstream csv = openOutput("--csv", options.csv);
-  std::ofstream positions = openOutput("--positions", options.positions);
-  std::ofstream mesh = openOutput("--mesh", options.mesh);
+  std::ofstream csv = pbd_cloth::bench::openOutput("--csv", options.csv);
+  std::ofstream positions = pbd_cloth::bench::openOutput("--positions", options.positions);
+  std::ofstream mesh = pbd_cloth::bench::openOutput("--mesh", options.mesh);
   if (csv.is_open()) csv << "t,max_strain,mean_strain,energy,max_penetration\n";
 
   pbd_cloth::Particles particles;
@@ -510,9 +433,9 @@ int run(const Options& options) {
       mesh << "f " << t[k] + 1 << ' ' << t[k + 1] + 1 << ' ' << t[k + 2] + 1 << '\n';
     }
   }
-  finishOutput(csv, options.csv);
-  finishOutput(positions, options.positions);
-  finishOutput(mesh, options.mesh);
+  pbd_cloth::bench::finishOutput(csv, options.csv);
+  pbd_cloth::bench::finishOutput(positions, options.positions);
+  pbd_cloth::bench::finishOutput(mesh, options.mesh);
 
   const double per_step = done > 0 ? 1.0 / static_cast<double>(done) : 0.0;
   const BulletKnobs& knobs = options.bullet;

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_command_line.h"
 #include "pbd_cloth/scene_yaml.h"
 #include "pbd_cloth/simulation.h"
 
@@ -22,7 +23,7 @@ const char kUsage[] =
     "Runs the scene without ROS for round(duration * step_rate) steps of 1/step_rate s and prints\n"
     "one line of key=value metrics on stdout (wall_ms_per_step max_strain mean_strain\n"
     "max_penetration self_intersections energy finite steps sim_time iterations_per_step\n"
-    "predict_ms collide_ms project_ms update_ms method substeps iterations ...).\n"
+    "predict_ms collide_ms project_ms update_ms contact_ms method substeps iterations ...).\n"
     "Only the step calls are timed. max_strain, max_penetration and max_self_intersections are\n"
     "maxima over the run, sampled every step when the scene has <= 5000 particles and every 10th\n"
     "step otherwise (metrics are expensive on big scenes), and always at the last step; the other\n"
@@ -44,128 +45,52 @@ const char kUsage[] =
     "  --mesh <file.obj>      write the final cloth as a Wavefront OBJ (v and 1-based f lines)\n"
     "  --target-max-strain <e>  instead of one run, search substeps x iterations (iterations\n"
     "                         1, 2, 4, 8; substeps by doubling then bisection up to\n"
-    "                         --max-substeps, default 256) for the cheapest measured setting whose\n"
-    "                         max_strain over the run is <= e; prints it with its cost and a YAML\n"
-    "                         snippet to paste (exit 3 when no setting meets it)\n"
+    "                         --max-substeps, default 256; settings with at least the passes of\n"
+    "                         one that already meets are skipped) for the cheapest measured\n"
+    "                         setting whose max_strain over the run is <= e; prints it with its\n"
+    "                         cost and a YAML snippet to paste (exit 3 when no setting meets it)\n"
     "  --target-mean-strain <e>  the same for the final mean_strain\n"
     "  --quiet                no progress message on stderr; the result line is still printed\n"
     "  --help                 this text\n";
 
 constexpr int kLargeScene = 5000;  // particles; above it the metrics are sampled every 10th step
 
-// A bad command line: exit status 2, like a bad scene key.
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
+using pbd_cloth::bench::UsageError;
 
-struct Options {
-  std::string config;
-  double duration = -1.0;
-  std::vector<std::string> overrides;
-  std::string csv;
-  std::string positions;
-  std::string mesh;
-  int sample_every = 0;  // 0: by scene size
-  bool quiet = false;
-  double target_max_strain = 0.0;   // > 0: search the cheapest setting instead of one run
+struct Options : pbd_cloth::bench::CommonOptions {
+  double target_max_strain = 0.0;  // > 0: search the cheapest setting instead of one run
   double target_mean_strain = 0.0;
-  int max_substeps = 256;           // upper end of the search
+  int max_substeps = 256;  // upper end of the search
 };
-
-double parseNumber(const std::string& option, const std::string& text) {
-  std::size_t used = 0;
-  double value = std::numeric_limits<double>::quiet_NaN();
-  try {
-    value = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used == 0 || used != text.size()) {
-    throw UsageError(option + ": expected a number, got '" + text + "'");
-  }
-  return value;
-}
 
 Options parseArguments(int argc, char** argv) {
+  namespace bench = pbd_cloth::bench;
   Options options;
-  std::vector<std::string> args(argv + 1, argv + argc);
-  for (std::size_t k = 0; k < args.size(); ++k) {
-    std::string option = args[k];
-    std::string value;
-    bool has_value = false;
-    // --option=value is accepted too; the first '=' splits, so --set=a.b=1 works.
-    const std::size_t equals = option.find('=');
-    if (option.rfind("--", 0) == 0 && equals != std::string::npos) {
-      value = option.substr(equals + 1);
-      option = option.substr(0, equals);
-      has_value = true;
-    }
-    auto next = [&]() -> std::string {
-      if (has_value) return value;
-      if (k + 1 >= args.size()) throw UsageError(option + " needs a value");
-      return args[++k];
-    };
+  bench::forEachOption(argc, argv, [&](const std::string& option, const bench::NextValue& next) {
     if (option == "--help" || option == "-h") {
       std::cout << kUsage;
       std::exit(0);
-    } else if (option == "--quiet") {
-      options.quiet = true;
-    } else if (option == "--config") {
-      options.config = next();
-    } else if (option == "--duration") {
-      const std::string text = next();
-      options.duration = parseNumber(option, text);
-      if (!std::isfinite(options.duration) || options.duration < 0.0) {
-        throw UsageError("--duration: must be a finite time >= 0 (s), got " + text);
-      }
-    } else if (option == "--set") {
-      options.overrides.push_back(next());
-    } else if (option == "--csv") {
-      options.csv = next();
-    } else if (option == "--positions") {
-      options.positions = next();
-    } else if (option == "--mesh") {
-      options.mesh = next();
-    } else if (option == "--target-max-strain" || option == "--target-mean-strain") {
-      const double target = parseNumber(option, next());
+    }
+    if (bench::parseCommonOption(option, next, options)) return true;
+    if (option == "--target-max-strain" || option == "--target-mean-strain") {
+      const double target = bench::parseNumber(option, next());
       if (!(target > 0.0 && std::isfinite(target))) {
         throw UsageError(option + ": must be a strain > 0, e.g. 0.01");
       }
       (option == "--target-max-strain" ? options.target_max_strain : options.target_mean_strain) =
           target;
     } else if (option == "--max-substeps") {
-      const double n = parseNumber(option, next());
-      if (!(n >= 1.0 && n <= 100000 && n == std::floor(n))) {
-        throw UsageError("--max-substeps: must be an integer in [1, 100000]");
-      }
-      options.max_substeps = static_cast<int>(n);
-    } else if (option == "--sample-every") {
-      const double n = parseNumber(option, next());
-      if (!(n >= 1.0 && n <= 1e9 && n == std::floor(n))) {
-        throw UsageError("--sample-every: must be an integer >= 1");
-      }
-      options.sample_every = static_cast<int>(n);
+      options.max_substeps = bench::parseCount(option, next(), 1, 100000);
     } else {
-      throw UsageError("unknown argument '" + args[k] + "'");
+      return false;
     }
-  }
-  if (options.config.empty()) throw UsageError("--config <scene.yaml> is required");
-  if (options.duration < 0.0) throw UsageError("--duration <s> is required");
+    return true;
+  });
+  bench::requireCommonOptions(options);
   if (options.target_max_strain > 0.0 && options.target_mean_strain > 0.0) {
     throw UsageError("give --target-max-strain or --target-mean-strain, not both");
   }
   return options;
-}
-
-// Opened before the run so that a bad path fails in a second, not after a long run.
-std::ofstream openOutput(const std::string& option, const std::string& path) {
-  std::ofstream out;
-  if (path.empty()) return out;
-  out.open(path, std::ios::trunc);
-  if (!out) throw UsageError(option + ": cannot write '" + path + "'");
-  // Exact doubles: files of two runs can be compared bit for bit (determinism checks).
-  out.precision(std::numeric_limits<double>::max_digits10);
-  return out;
 }
 
 void writePositions(std::ofstream& out, const pbd_cloth::Particles& particles) {
@@ -196,12 +121,6 @@ void writeCsvRow(std::ofstream& csv, double t, const pbd_cloth::Metrics& m) {
       << m.max_penetration << '\n';
 }
 
-void finishOutput(std::ofstream& out, const std::string& path) {
-  if (!out.is_open()) return;
-  out.close();
-  if (!out) throw std::runtime_error("writing '" + path + "' failed");
-}
-
 // What one run measured.
 struct BenchResult {
   long long steps = 0;
@@ -212,7 +131,7 @@ struct BenchResult {
   int max_self_intersections = 0;
   pbd_cloth::Metrics final_metrics;
   double iterations_per_step = 0.0;
-  double predict_ms = 0.0, collide_ms = 0.0, project_ms = 0.0, update_ms = 0.0;
+  double predict_ms = 0.0, collide_ms = 0.0, project_ms = 0.0, update_ms = 0.0, contact_ms = 0.0;
   int particles = 0;
   int sample_every = 1;
 };
@@ -245,7 +164,7 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
   writeCsvRow(csv, sim.time(), last);
 
   double step_seconds = 0.0;
-  double predict = 0.0, collide = 0.0, project = 0.0, update = 0.0;
+  double predict = 0.0, collide = 0.0, project = 0.0, update = 0.0, contact = 0.0;
   long long iterations = 0;
   long long done = 0;
   using Clock = std::chrono::steady_clock;
@@ -259,12 +178,14 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
     collide += stats.collide_time;
     project += stats.project_time;
     update += stats.update_time;
+    contact += stats.contact_time;
     iterations += stats.iterations;
     if (done % result.sample_every != 0 && done != steps) continue;
     last = sim.computeMetrics();
     result.max_strain = std::max(result.max_strain, last.max_strain);
     result.max_penetration = std::max(result.max_penetration, last.max_penetration);
-    result.max_self_intersections = std::max(result.max_self_intersections, last.self_intersections);
+    result.max_self_intersections =
+        std::max(result.max_self_intersections, last.self_intersections);
     writeCsvRow(csv, sim.time(), last);
     // A diverged state stays diverged; stepping NaNs further only costs time.
     if (!last.finite) break;
@@ -281,6 +202,7 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
   result.collide_ms = 1e3 * collide * per_step;
   result.project_ms = 1e3 * project * per_step;
   result.update_ms = 1e3 * update * per_step;
+  result.contact_ms = 1e3 * contact * per_step;
   return result;
 }
 
@@ -291,13 +213,13 @@ void printResult(const pbd_cloth::SceneConfig& scene, const BenchResult& r) {
       "self_intersections=%d energy=%.9g finite=%d steps=%lld sim_time=%.9g "
       "iterations_per_step=%.6g predict_ms=%.6g collide_ms=%.6g project_ms=%.6g update_ms=%.6g "
       "method=%s substeps=%d iterations=%d particles=%d max_self_intersections=%d "
-      "sample_every=%d final_max_strain=%.9g ordering=%s\n",
+      "sample_every=%d final_max_strain=%.9g ordering=%s contact_ms=%.6g\n",
       r.wall_ms_per_step, r.max_strain, last.mean_strain, r.max_penetration,
       last.self_intersections, last.energy, last.finite ? 1 : 0, r.steps, r.sim_time,
       r.iterations_per_step, r.predict_ms, r.collide_ms, r.project_ms, r.update_ms,
       pbd_cloth::toString(scene.solver.method), scene.solver.substeps, scene.solver.iterations,
       r.particles, r.max_self_intersections, r.sample_every, last.max_strain,
-      pbd_cloth::toString(scene.solver.ordering));
+      pbd_cloth::toString(scene.solver.ordering), r.contact_ms);
 }
 
 // --target-max-strain / --target-mean-strain: the cheapest substeps x iterations that meet the
@@ -318,9 +240,9 @@ int searchCheapest(const pbd_cloth::SceneConfig& base, const Options& options) {
     out = simulate(scene, quiet, no_output, no_output, no_output);
     const double error = use_max ? out.max_strain : out.final_metrics.mean_strain;
     const bool meets = out.final_metrics.finite && error <= target;
-    std::fprintf(stderr, "cloth_bench: substeps=%d iterations=%d %s=%.4g wall_ms_per_step=%.4g %s\n",
-                 substeps, iterations, metric, error, out.wall_ms_per_step,
-                 meets ? "meets" : "misses");
+    std::fprintf(
+        stderr, "cloth_bench: substeps=%d iterations=%d %s=%.4g wall_ms_per_step=%.4g %s\n",
+        substeps, iterations, metric, error, out.wall_ms_per_step, meets ? "meets" : "misses");
     return meets;
   };
   struct Candidate {
@@ -328,14 +250,23 @@ int searchCheapest(const pbd_cloth::SceneConfig& base, const Options& options) {
     BenchResult result;
   };
   std::vector<Candidate> found;
+  // A step costs about its number of passes (substeps x iterations; the broad phase and the
+  // velocity update are a small part), so once a setting meets the target no setting with as many
+  // passes or more is measured: it cannot be cheaper. This keeps the search to a few runs.
+  int fewest_passes = std::numeric_limits<int>::max();
   for (int iterations : {1, 2, 4, 8}) {
     int low = 0, high = 1;  // low misses (0 = none tried), high is the candidate that meets
     BenchResult result;
-    while (high <= options.max_substeps && !measure(high, iterations, result)) {
+    bool met = false;
+    while (high <= options.max_substeps && high * iterations < fewest_passes) {
+      if (measure(high, iterations, result)) {
+        met = true;
+        break;
+      }
       low = high;
       high *= 2;
     }
-    if (high > options.max_substeps) continue;
+    if (!met) continue;
     BenchResult best = result;
     while (high - low > 1) {
       const int mid = (low + high) / 2;
@@ -347,22 +278,24 @@ int searchCheapest(const pbd_cloth::SceneConfig& base, const Options& options) {
       }
     }
     found.push_back({high, iterations, best});
+    fewest_passes = std::min(fewest_passes, high * iterations);
   }
   if (found.empty()) {
     std::printf("target_%s=%.6g met=0 max_substeps=%d\n", metric, target, options.max_substeps);
     return 3;
   }
-  const Candidate& cheapest = *std::min_element(
-      found.begin(), found.end(), [](const Candidate& a, const Candidate& b) {
+  const Candidate& cheapest =
+      *std::min_element(found.begin(), found.end(), [](const Candidate& a, const Candidate& b) {
         return a.result.wall_ms_per_step < b.result.wall_ms_per_step;
       });
   const double error =
       use_max ? cheapest.result.max_strain : cheapest.result.final_metrics.mean_strain;
-  std::printf("target_%s=%.6g met=1 substeps=%d iterations=%d %s=%.6g wall_ms_per_step=%.6g "
-              "method=%s ordering=%s\n",
-              metric, target, cheapest.substeps, cheapest.iterations, metric, error,
-              cheapest.result.wall_ms_per_step, pbd_cloth::toString(base.solver.method),
-              pbd_cloth::toString(base.solver.ordering));
+  std::printf(
+      "target_%s=%.6g met=1 substeps=%d iterations=%d %s=%.6g wall_ms_per_step=%.6g "
+      "method=%s ordering=%s\n",
+      metric, target, cheapest.substeps, cheapest.iterations, metric, error,
+      cheapest.result.wall_ms_per_step, pbd_cloth::toString(base.solver.method),
+      pbd_cloth::toString(base.solver.ordering));
   std::printf("# paste into the scene YAML:\nsolver:\n  substeps: %d\n  iterations: %d\n",
               cheapest.substeps, cheapest.iterations);
   return 0;
@@ -378,15 +311,15 @@ int run(const Options& options) {
     return searchCheapest(scene, options);
   }
 
-  std::ofstream csv = openOutput("--csv", options.csv);
-  std::ofstream positions = openOutput("--positions", options.positions);
-  std::ofstream mesh = openOutput("--mesh", options.mesh);
+  std::ofstream csv = pbd_cloth::bench::openOutput("--csv", options.csv);
+  std::ofstream positions = pbd_cloth::bench::openOutput("--positions", options.positions);
+  std::ofstream mesh = pbd_cloth::bench::openOutput("--mesh", options.mesh);
   if (csv.is_open()) csv << "t,max_strain,mean_strain,energy,max_penetration\n";
 
   const BenchResult result = simulate(scene, options, csv, positions, mesh);
-  finishOutput(csv, options.csv);
-  finishOutput(positions, options.positions);
-  finishOutput(mesh, options.mesh);
+  pbd_cloth::bench::finishOutput(csv, options.csv);
+  pbd_cloth::bench::finishOutput(positions, options.positions);
+  pbd_cloth::bench::finishOutput(mesh, options.mesh);
   printResult(scene, result);
   return 0;
 }

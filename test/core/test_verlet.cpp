@@ -86,8 +86,8 @@ TEST(Verlet, OnePassLeavesErrorThatRelaxationRemoves) {
     return std::abs((x[0] - x[1]).norm() - 100.0);
   };
   const double one_pass = run(1), many = run(50);
-  EXPECT_GT(one_pass, 1.0);   // 1 pass: the box undoes part of the stick correction
-  EXPECT_LT(many, 1e-6);      // relaxation converges to both constraints at once
+  EXPECT_GT(one_pass, 1.0);  // 1 pass: the box undoes part of the stick correction
+  EXPECT_LT(many, 1e-6);     // relaxation converges to both constraints at once
 }
 
 // Adaptive count: passes stop when the largest change of a pass is below solver.tolerance.

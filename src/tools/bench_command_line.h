@@ -1,0 +1,137 @@
+// The command line that cloth_bench and bullet_cloth_bench share: both take the same options and
+// print the same key=value line, so the charts compare the two on equal terms. Header-only: the
+// two tools are its only users.
+#pragma once
+
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace pbd_cloth {
+namespace bench {
+
+// A bad command line: exit status 2, like a bad scene key.
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+inline double parseNumber(const std::string& option, const std::string& text) {
+  std::size_t used = 0;
+  double value = std::numeric_limits<double>::quiet_NaN();
+  try {
+    value = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size()) {
+    throw UsageError(option + ": expected a number, got '" + text + "'");
+  }
+  return value;
+}
+
+inline int parseCount(const std::string& option, const std::string& text, int low, int high) {
+  const double value = parseNumber(option, text);
+  if (!(value >= low && value <= high && value == std::floor(value))) {
+    throw UsageError(option + ": must be an integer in [" + std::to_string(low) + ", " +
+                     std::to_string(high) + "], got " + text);
+  }
+  return static_cast<int>(value);
+}
+
+// The options both tools take.
+struct CommonOptions {
+  std::string config;
+  double duration = -1.0;
+  std::vector<std::string> overrides;  // --set key=value, in order
+  std::string csv;
+  std::string positions;
+  std::string mesh;
+  int sample_every = 0;  // 0: by scene size
+  bool quiet = false;
+};
+
+using NextValue = std::function<std::string()>;
+
+// Calls handle(option, next) for every option of argv, where next() returns the option's value
+// (from --option=value or the following argument). handle returns false for an option it does
+// not know, which is then an error.
+inline void forEachOption(int argc, char** argv,
+                          const std::function<bool(const std::string&, const NextValue&)>& handle) {
+  const std::vector<std::string> args(argv + 1, argv + argc);
+  for (std::size_t k = 0; k < args.size(); ++k) {
+    std::string option = args[k];
+    std::string value;
+    bool has_value = false;
+    // --option=value is accepted too; the first '=' splits, so --set=a.b=1 works.
+    const std::size_t equals = option.find('=');
+    if (option.rfind("--", 0) == 0 && equals != std::string::npos) {
+      value = option.substr(equals + 1);
+      option = option.substr(0, equals);
+      has_value = true;
+    }
+    const NextValue next = [&]() -> std::string {
+      if (has_value) return value;
+      if (k + 1 >= args.size()) throw UsageError(option + " needs a value");
+      return args[++k];
+    };
+    if (!handle(option, next)) throw UsageError("unknown argument '" + args[k] + "'");
+  }
+}
+
+// Takes one of the common options; false when `option` is not one of them.
+inline bool parseCommonOption(const std::string& option, const NextValue& next,
+                              CommonOptions& options) {
+  if (option == "--quiet") {
+    options.quiet = true;
+  } else if (option == "--config") {
+    options.config = next();
+  } else if (option == "--duration") {
+    const std::string text = next();
+    options.duration = parseNumber(option, text);
+    if (!std::isfinite(options.duration) || options.duration < 0.0) {
+      throw UsageError("--duration: must be a finite time >= 0 (s), got " + text);
+    }
+  } else if (option == "--set") {
+    options.overrides.push_back(next());
+  } else if (option == "--csv") {
+    options.csv = next();
+  } else if (option == "--positions") {
+    options.positions = next();
+  } else if (option == "--mesh") {
+    options.mesh = next();
+  } else if (option == "--sample-every") {
+    options.sample_every = parseCount(option, next(), 1, 1000000000);
+  } else {
+    return false;
+  }
+  return true;
+}
+
+inline void requireCommonOptions(const CommonOptions& options) {
+  if (options.config.empty()) throw UsageError("--config <scene.yaml> is required");
+  if (options.duration < 0.0) throw UsageError("--duration <s> is required");
+}
+
+// Opened before the run so that a bad path fails in a second, not after a long run.
+inline std::ofstream openOutput(const std::string& option, const std::string& path) {
+  std::ofstream out;
+  if (path.empty()) return out;
+  out.open(path, std::ios::trunc);
+  if (!out) throw UsageError(option + ": cannot write '" + path + "'");
+  // Exact doubles: files of two runs can be compared bit for bit (determinism checks).
+  out.precision(std::numeric_limits<double>::max_digits10);
+  return out;
+}
+
+inline void finishOutput(std::ofstream& out, const std::string& path) {
+  if (!out.is_open()) return;
+  out.close();
+  if (!out) throw std::runtime_error("writing '" + path + "' failed");
+}
+
+}  // namespace bench
+}  // namespace pbd_cloth

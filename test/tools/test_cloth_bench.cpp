@@ -1,0 +1,160 @@
+// cloth_bench as a user runs it: the program, its output line, its files and its exit status.
+// The accuracy tests drive the core directly; these check the tool the charts and the README
+// figures come from.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+
+namespace {
+
+struct BenchRun {
+  int status = -1;
+  std::string out;  // stdout and stderr
+};
+
+BenchRun runBench(const std::string& arguments) {
+  const std::string command = std::string(CLOTH_BENCH) + " --config " + PBD_CLOTH_SOURCE_DIR +
+                              "/config/hanging.yaml " + arguments + " 2>&1";
+  BenchRun run;
+  FILE* pipe = popen(command.c_str(), "r");
+  if (pipe == nullptr) return run;
+  std::array<char, 4096> buffer;
+  std::size_t n;
+  while ((n = std::fread(buffer.data(), 1, buffer.size(), pipe)) > 0)
+    run.out.append(buffer.data(), n);
+  const int raw = pclose(pipe);
+  run.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+  return run;
+}
+
+// key=value pairs of the lines of `text` (later lines win).
+std::map<std::string, std::string> keyValues(const std::string& text) {
+  std::map<std::string, std::string> values;
+  std::istringstream words(text);
+  std::string word;
+  while (words >> word) {
+    const std::size_t equals = word.find('=');
+    if (equals != std::string::npos && equals > 0) {
+      values[word.substr(0, equals)] = word.substr(equals + 1);
+    }
+  }
+  return values;
+}
+
+// A 10 x 10 version of the default scene: the same file, scaled down with --set.
+const std::string kSmall =
+    " --quiet --set cloth.rows=10 --set cloth.cols=10 --set 'cloth.pinned=[0,9]'"
+    " --set cloth.spacing=0.1";
+
+std::string readFile(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+TEST(ClothBench, PrintsEveryMetricOfTheInterface) {
+  const BenchRun run = runBench("--duration 0.5" + kSmall);
+  ASSERT_EQ(run.status, 0) << run.out;
+  const auto values = keyValues(run.out);
+  for (const char* key :
+       {"wall_ms_per_step", "max_strain", "mean_strain", "max_penetration", "self_intersections",
+        "energy", "finite", "predict_ms", "collide_ms", "project_ms", "contact_ms", "update_ms"}) {
+    EXPECT_EQ(values.count(key), 1u) << "missing " << key << " in: " << run.out;
+  }
+  EXPECT_EQ(values.at("finite"), "1");
+  EXPECT_EQ(values.at("steps"), "30");  // 0.5 s at the scene's 60 Hz
+  EXPECT_EQ(values.at("particles"), "100");
+}
+
+TEST(ClothBench, WritesPositionsAndMeshOfTheFinalState) {
+  const std::string positions = ::testing::TempDir() + "bench_positions.csv";
+  const std::string mesh = ::testing::TempDir() + "bench_mesh.obj";
+  const BenchRun run =
+      runBench("--duration 0.2 --positions " + positions + " --mesh " + mesh + kSmall);
+  ASSERT_EQ(run.status, 0) << run.out;
+  std::istringstream lines(readFile(positions));
+  std::string line;
+  int count = 0;
+  while (std::getline(lines, line)) {
+    int index;
+    double x, y, z;
+    char c1, c2, c3;
+    std::istringstream fields(line);
+    ASSERT_TRUE(fields >> index >> c1 >> x >> c2 >> y >> c3 >> z) << line;
+    EXPECT_EQ(index, count);
+    ++count;
+  }
+  EXPECT_EQ(count, 100);
+  std::istringstream obj(readFile(mesh));
+  int vertices = 0, faces = 0;
+  while (std::getline(obj, line)) {
+    if (line.rfind("v ", 0) == 0) ++vertices;
+    if (line.rfind("f ", 0) == 0) ++faces;
+  }
+  EXPECT_EQ(vertices, 100);
+  EXPECT_EQ(faces, 2 * 9 * 9);
+}
+
+TEST(ClothBench, RunsAreBitIdentical) {
+  const std::string a = ::testing::TempDir() + "bench_a.csv";
+  const std::string b = ::testing::TempDir() + "bench_b.csv";
+  ASSERT_EQ(runBench("--duration 0.5 --positions " + a + kSmall).status, 0);
+  ASSERT_EQ(runBench("--duration 0.5 --positions " + b + kSmall).status, 0);
+  const std::string first = readFile(a);
+  EXPECT_FALSE(first.empty());
+  EXPECT_EQ(first, readFile(b));
+}
+
+TEST(ClothBench, BadKeyOrArgumentExitsWithTwoAndNamesIt) {
+  BenchRun run = runBench("--duration 0.1 --set solver.substepz=3");
+  EXPECT_EQ(run.status, 2);
+  EXPECT_NE(run.out.find("substepz"), std::string::npos) << run.out;
+  run = runBench("--duration 0.1 --set solver.substeps=0");
+  EXPECT_EQ(run.status, 2);
+  EXPECT_NE(run.out.find("solver.substeps"), std::string::npos) << run.out;
+  run = runBench("--duration soon");
+  EXPECT_EQ(run.status, 2);
+  EXPECT_NE(run.out.find("--duration"), std::string::npos) << run.out;
+}
+
+// The search's answer meets the target, and one substep less at the same iterations does not:
+// it is the cheapest of its column, not just some setting that meets.
+TEST(ClothBench, TargetSearchFindsTheFewestSubstepsThatMeet) {
+  const double target = 0.02;
+  const BenchRun search =
+      runBench("--duration 1 --target-max-strain " + std::to_string(target) + kSmall);
+  ASSERT_EQ(search.status, 0) << search.out;
+  const auto found = keyValues(search.out.substr(search.out.find("target_max_strain=")));
+  ASSERT_EQ(found.at("met"), "1");
+  const int substeps = std::stoi(found.at("substeps"));
+  const int iterations = std::stoi(found.at("iterations"));
+  EXPECT_LE(std::stod(found.at("max_strain")), target);
+  EXPECT_NE(search.out.find("substeps: " + std::to_string(substeps)), std::string::npos)
+      << "no YAML snippet: " << search.out;
+
+  const auto rerun = [&](int s) {
+    return keyValues(runBench("--duration 1 --set solver.substeps=" + std::to_string(s) +
+                              " --set solver.iterations=" + std::to_string(iterations) + kSmall)
+                         .out);
+  };
+  EXPECT_LE(std::stod(rerun(substeps).at("max_strain")), target);
+  if (substeps > 1) {
+    EXPECT_GT(std::stod(rerun(substeps - 1).at("max_strain")), target);
+  }
+}
+
+TEST(ClothBench, UnreachableTargetExitsWithThree) {
+  const BenchRun run =
+      runBench("--duration 0.5 --max-substeps 2 --target-max-strain 1e-9" + kSmall);
+  EXPECT_EQ(run.status, 3) << run.out;
+  EXPECT_NE(run.out.find("met=0"), std::string::npos) << run.out;
+}
+
+}  // namespace
