@@ -37,6 +37,14 @@ const char* toString(Ordering ordering);
 struct Pose {
   Eigen::Vector3d position = Eigen::Vector3d::Zero();
   Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
+
+  // The pose `local`, given in this pose's frame, expressed in the frame this pose is given in.
+  Pose compose(const Pose& local) const {
+    Pose out;
+    out.position = position + orientation * local.position;
+    out.orientation = (orientation * local.orientation).normalized();
+    return out;
+  }
 };
 
 struct SolverConfig {

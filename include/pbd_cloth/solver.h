@@ -27,6 +27,10 @@ struct StepStats {
   // Of project_time: the contact projections (particle-particle, self-collision, obstacles,
   // bounds, with friction), i.e. the collisions' narrow phase.
   double contact_time = 0.0;
+  // Stretch constraints skipped in the last pass of the step because their particles coincide
+  // (no direction to correct along), and the index of the first of them (-1: none).
+  int degenerate_constraints = 0;
+  int first_degenerate_constraint = -1;
 };
 
 class Solver {
@@ -75,6 +79,7 @@ class Solver {
   Vec3Array predicted_;            // x~ = x_prev + h v~ of the current substep (free particles)
   Vec3Array constraint_force_;
   StepStats stats_;
+  int degenerate_in_pass_ = 0;
 };
 
 }  // namespace pbd_cloth

@@ -124,7 +124,12 @@ double Solver::projectStretch(double h, Particles& p, const ClothTopology& topol
     if (w < kMinInverseMass) continue;
     const Vec3 delta = p.position[con.i] - p.position[con.j];
     const double length = delta.norm();
-    if (length < kMinLength) continue;
+    if (length < kMinLength) {
+      // Coincident particles: no direction to push along. Skipped for this pass (the other
+      // constraints pull them apart) and reported, so it does not pass silently.
+      if (degenerate_in_pass_++ == 0) stats_.first_degenerate_constraint = c;
+      continue;
+    }
     const Vec3 n = delta / length;
     const double constraint = length - con.rest_length;
     double dlambda =
@@ -144,8 +149,9 @@ double Solver::projectStretch(double h, Particles& p, const ClothTopology& topol
   return max_change;
 }
 
-// Isometric bending C = scale |b|, b = sum_k K_k x_k, grad_k C = scale K_k b / |b|. A flat hinge
-// (|b| = 0) already satisfies C = 0 and is skipped: no division by zero.
+// Isometric bending as the vector constraint C = scale b, b = sum_k K_k x_k (particles.h): linear
+// in the positions, grad_k C = scale K_k I. A flat hinge (b = 0) gets no correction; nothing is
+// divided by |b|, so there is no degenerate case.
 double Solver::projectBend(double h, Particles& p, const ClothTopology& topology) {
   if (bend_compliance_ < 0.0 || config_.method == Method::kMassSpring) return 0.0;
   const bool xpbd = config_.method == Method::kXpbd;
@@ -331,6 +337,8 @@ void Solver::countJacobiConstraints(const Particles& p, const ClothTopology& top
 
 double Solver::projectPass(double h, Particles& p, const ClothTopology& topology,
                            Collisions& collisions, bool /*first_pass*/) {
+  // The count of the last pass is what the step reports: constraints still degenerate at its end.
+  degenerate_in_pass_ = 0;
   double max_change = projectStretch(h, p, topology);
   max_change = std::max(max_change, projectBend(h, p, topology));
   if (config_.ordering == Ordering::kJacobi) applyJacobi(p, max_change);
@@ -367,10 +375,16 @@ void Solver::massSpringSubstep(double h, double s_end, Particles& p, const Cloth
                                Collisions& collisions) {
   const double k = config_.spring_stiffness, damper = config_.spring_damping;
   for (int i = 0; i < p.size(); ++i) force_[i] = p.mass[i] * config_.gravity;
-  for (const DistanceConstraint& con : topology.stretch) {
+  degenerate_in_pass_ = 0;
+  const int count = static_cast<int>(topology.stretch.size());
+  for (int c = 0; c < count; ++c) {
+    const DistanceConstraint& con = topology.stretch[c];
     const Vec3 delta = p.position[con.i] - p.position[con.j];
     const double length = delta.norm();
-    if (length < kMinLength) continue;
+    if (length < kMinLength) {  // coincident: no direction, reported as in projectStretch
+      if (degenerate_in_pass_++ == 0) stats_.first_degenerate_constraint = c;
+      continue;
+    }
     const Vec3 n = delta / length;
     const double relative_speed = (p.velocity[con.i] - p.velocity[con.j]).dot(n);
     const Vec3 f = (-k * (length - con.rest_length) - damper * relative_speed) * n;
@@ -411,6 +425,8 @@ void Solver::step(double dt, Particles& p, const ClothTopology& topology, Collis
   stats_.iterations = 0;
   stats_.predict_time = stats_.collide_time = stats_.project_time = stats_.update_time = 0.0;
   stats_.contact_time = 0.0;
+  stats_.first_degenerate_constraint = -1;
+  degenerate_in_pass_ = 0;
   p.step_start = p.position;
   if (config_.ordering == Ordering::kJacobi) countJacobiConstraints(p, topology);
 
@@ -472,6 +488,8 @@ void Solver::step(double dt, Particles& p, const ClothTopology& topology, Collis
   }
   collisions.endStep();
   stats_.sim_time += dt;
+  stats_.degenerate_constraints = degenerate_in_pass_;
+  if (degenerate_in_pass_ == 0) stats_.first_degenerate_constraint = -1;
   stats_.step_wall_time = seconds(t_start, Clock::now());
 }
 

@@ -47,6 +47,10 @@ void ClothDiagnostics::simulationStatus(diagnostic_updater::DiagnosticStatusWrap
                     "cannot keep real time: real-time factor %.2f, a step takes %.1f ms for a "
                     "period of %.1f ms (lower step_rate, substeps or the cloth size)",
                     health_.real_time_factor, 1e3 * mean_step, 1e3 * health_.step_period);
+  } else if (health_.degenerate_constraints > 0) {
+    status.summaryf(DiagnosticStatus::WARN,
+                    "%d stretch constraint(s) skipped in the last step: their particles coincide",
+                    health_.degenerate_constraints);
   } else {
     status.summary(DiagnosticStatus::OK, "keeping real time");
   }
@@ -60,6 +64,7 @@ void ClothDiagnostics::simulationStatus(diagnostic_updater::DiagnosticStatusWrap
   status.add("iterations (last step)", health_.iterations);
   status.add("max strain", health_.max_strain);
   status.add("max penetration (m)", health_.max_penetration);
+  status.add("degenerate constraints (last step)", health_.degenerate_constraints);
 }
 
 void ClothDiagnostics::inputStatus(diagnostic_updater::DiagnosticStatusWrapper& status) {

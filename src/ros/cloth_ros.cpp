@@ -224,6 +224,7 @@ void ClothRos::stepCallback(const ros::WallTimerEvent& /*event*/) {
   sim_->step();
   real_time_factor_.add(ros::WallTime::now().toSec(), sim_->time());
   diagnostics_->addStep(sim_->stats().step_wall_time);
+  warnAboutDegenerateConstraints();
 
   if (sim_->stats().step_wall_time > period) {
     ROS_WARN_THROTTLE(10.0,
@@ -232,6 +233,19 @@ void ClothRos::stepCallback(const ros::WallTimerEvent& /*event*/) {
                       "solver.substeps or the cloth size.",
                       1e3 * sim_->stats().step_wall_time, 1e3 * period, real_time_factor_.value());
   }
+}
+
+// Coincident particles (a cloth crushed flat by a gripper, a bad initial state) leave their stretch
+// constraint without a direction: the solver skips it, and says so here, by index.
+void ClothRos::warnAboutDegenerateConstraints() {
+  const StepStats& stats = sim_->stats();
+  if (stats.degenerate_constraints == 0 || stats.first_degenerate_constraint < 0) return;
+  const DistanceConstraint& con = sim_->topology().stretch[stats.first_degenerate_constraint];
+  ROS_WARN_THROTTLE(5.0,
+                    "%d stretch constraint(s) skipped in the last step: their particles coincide "
+                    "(first: constraint %d between particles %d and %d); the other constraints "
+                    "pull them apart. Counted in ~state stats.degenerate_constraints.",
+                    stats.degenerate_constraints, stats.first_degenerate_constraint, con.i, con.j);
 }
 
 void ClothRos::publishCallback(const ros::WallTimerEvent& /*event*/) {
@@ -264,6 +278,7 @@ void ClothRos::diagnosticsCallback(const ros::WallTimerEvent& /*event*/) {
   health.iterations = static_cast<int>(stats.iterations);
   health.max_strain = stats.max_strain;
   health.max_penetration = stats.max_penetration;
+  health.degenerate_constraints = static_cast<int>(stats.degenerate_constraints);
   health.finite = allFinite(sim_->particles());
   diagnostics_->report(health, rejections_);
 }

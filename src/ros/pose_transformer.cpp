@@ -20,14 +20,6 @@ std::string tf2FrameName(const std::string& frame) {
   return !frame.empty() && frame.front() == '/' ? frame.substr(1) : frame;
 }
 
-// `frame_pose` maps frame coordinates into the scene frame; `local` is a pose in that frame.
-Pose compose(const Pose& frame_pose, const Pose& local) {
-  Pose out;
-  out.position = frame_pose.position + frame_pose.orientation * local.position;
-  out.orientation = (frame_pose.orientation * local.orientation).normalized();
-  return out;
-}
-
 Pose poseFromTransform(const geometry_msgs::TransformStamped& transform) {
   const Eigen::Isometry3d isometry = tf2::transformToEigen(transform);
   Pose pose;
@@ -88,9 +80,8 @@ bool PoseTransformer::toSceneFrame(const geometry_msgs::PoseStamped& msg, Pose& 
     return false;
   }
   try {
-    pose = compose(
-        poseFromTransform(buffer_.lookupTransform(config_.frame_id, frame, msg.header.stamp)),
-        local);
+    pose = poseFromTransform(buffer_.lookupTransform(config_.frame_id, frame, msg.header.stamp))
+               .compose(local);
   } catch (const tf2::TransformException& exception) {
     // canTransform said yes, but the cache may have moved on since (a stamp at its old edge).
     failure = {RejectReason::kTfFailure, exception.what()};

@@ -1,5 +1,7 @@
 #include "pbd_cloth/ros/ros_conversions.h"
 
+#include <cstdint>
+
 #include "pbd_cloth/cloth_builder.h"
 #include "pbd_cloth/shapes.h"
 
@@ -32,10 +34,10 @@ Vec3 initialClothCentre(const ClothConfig& cloth) {
 // `local` (in the obstacle's frame) placed by the obstacle's pose.
 geometry_msgs::Pose placed(const Pose& obstacle_pose, const Vec3& local_position,
                            const Eigen::Quaterniond& local_orientation) {
-  Pose pose;
-  pose.position = obstacle_pose.position + obstacle_pose.orientation * local_position;
-  pose.orientation = obstacle_pose.orientation * local_orientation;
-  return RosConversions::toPoseMessage(pose);
+  Pose local;
+  local.position = local_position;
+  local.orientation = local_orientation;
+  return RosConversions::toPoseMessage(obstacle_pose.compose(local));
 }
 
 // Fields every marker of this node shares.
@@ -98,6 +100,7 @@ void RosConversions::toStatsMessage(const Simulation& sim, SolverStats& msg) {
   msg.max_strain = stats.max_strain;
   msg.mean_strain = stats.mean_strain;
   msg.max_penetration = stats.max_penetration;
+  msg.degenerate_constraints = static_cast<std::uint32_t>(stats.degenerate_constraints);
   msg.real_time_factor = 0.0;
   msg.rejected_inputs = 0;
 }

@@ -72,6 +72,8 @@ TEST(Robustness, CoincidentNeighboursSeparateAgain) {
     }
     EXPECT_GT((sim.particles().position[12] - sim.particles().position[13]).norm(), 0.05)
         << name(v);
+    EXPECT_EQ(sim.stats().degenerate_constraints, 0) << name(v) << ": separated again";
+    EXPECT_EQ(sim.stats().first_degenerate_constraint, -1) << name(v);
   }
 }
 
@@ -89,6 +91,25 @@ TEST(Robustness, ClothCollapsedToOnePointStaysFinite) {
     }
     EXPECT_EQ(sim.particles().position[0], Vec3(0.3, -0.2, 1.0)) << name(v);
     EXPECT_EQ(sim.particles().position[1], Vec3(0.3, -0.2, 1.0)) << name(v);
+  }
+}
+
+// Two free particles on one spot, falling together: their one constraint never gets a direction.
+// Every step reports exactly it, and both stay finite and together.
+TEST(Robustness, CoincidentPairIsReportedEveryStep) {
+  for (const Variant& v : allVariants()) {
+    SceneConfig scene = degenerateScene(1, 2, v);
+    scene.cloth.pinned.clear();
+    Simulation sim(scene);
+    ASSERT_EQ(sim.topology().stretch.size(), 1u);
+    sim.mutableParticles().position[1] = sim.particles().position[0];
+    for (int k = 0; k < 10; ++k) {
+      sim.step();
+      expectFinite(sim, name(v));
+      EXPECT_EQ(sim.stats().degenerate_constraints, 1) << name(v) << " step " << k;
+      EXPECT_EQ(sim.stats().first_degenerate_constraint, 0) << name(v) << " step " << k;
+    }
+    EXPECT_EQ(sim.particles().position[0], sim.particles().position[1]) << name(v);
   }
 }
 

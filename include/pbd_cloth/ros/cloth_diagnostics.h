@@ -24,7 +24,8 @@ struct SimulationHealth {
   int substeps = 0;
   int iterations = 0;
   double max_strain = 0.0;
-  double max_penetration = 0.0;  // m
+  double max_penetration = 0.0;    // m
+  int degenerate_constraints = 0;  // skipped in the last step (coincident particles)
   bool finite = true;
 };
 

@@ -106,6 +106,7 @@ class ClothRos {
   void publishState();
   void publishMarkers();
   void publishWrenches();
+  void warnAboutDegenerateConstraints();
 
   ros::NodeHandle nh_;
   ros::NodeHandle nh_private_;
