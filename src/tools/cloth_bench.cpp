@@ -23,7 +23,8 @@ const char kUsage[] =
     "Runs the scene without ROS for round(duration * step_rate) steps of 1/step_rate s and prints\n"
     "one line of key=value metrics on stdout (wall_ms_per_step max_strain mean_strain\n"
     "max_penetration self_intersections energy finite steps sim_time iterations_per_step\n"
-    "predict_ms collide_ms project_ms update_ms contact_ms method substeps iterations ...).\n"
+    "predict_ms collide_ms project_ms update_ms contact_ms broad_phase_runs method substeps\n"
+    "iterations ...).\n"
     "Only the step calls are timed. max_strain, max_penetration and max_self_intersections are\n"
     "maxima over the run, sampled every step when the scene has <= 5000 particles and every 10th\n"
     "step otherwise (metrics are expensive on big scenes), and always at the last step; the other\n"
@@ -132,6 +133,7 @@ struct BenchResult {
   pbd_cloth::Metrics final_metrics;
   double iterations_per_step = 0.0;
   double predict_ms = 0.0, collide_ms = 0.0, project_ms = 0.0, update_ms = 0.0, contact_ms = 0.0;
+  double broad_phase_runs = 0.0;  // per step: 1, plus re-runs for particles that left their boxes
   int particles = 0;
   int sample_every = 1;
 };
@@ -165,6 +167,7 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
 
   double step_seconds = 0.0;
   double predict = 0.0, collide = 0.0, project = 0.0, update = 0.0, contact = 0.0;
+  long long broad_phase_runs = 0;
   long long iterations = 0;
   long long done = 0;
   using Clock = std::chrono::steady_clock;
@@ -179,6 +182,7 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
     project += stats.project_time;
     update += stats.update_time;
     contact += stats.contact_time;
+    broad_phase_runs += sim.collisions().stats().broad_phase_runs;
     iterations += stats.iterations;
     if (done % result.sample_every != 0 && done != steps) continue;
     last = sim.computeMetrics();
@@ -203,6 +207,7 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
   result.project_ms = 1e3 * project * per_step;
   result.update_ms = 1e3 * update * per_step;
   result.contact_ms = 1e3 * contact * per_step;
+  result.broad_phase_runs = static_cast<double>(broad_phase_runs) * per_step;
   return result;
 }
 
@@ -213,13 +218,13 @@ void printResult(const pbd_cloth::SceneConfig& scene, const BenchResult& r) {
       "self_intersections=%d energy=%.9g finite=%d steps=%lld sim_time=%.9g "
       "iterations_per_step=%.6g predict_ms=%.6g collide_ms=%.6g project_ms=%.6g update_ms=%.6g "
       "method=%s substeps=%d iterations=%d particles=%d max_self_intersections=%d "
-      "sample_every=%d final_max_strain=%.9g ordering=%s contact_ms=%.6g\n",
+      "sample_every=%d final_max_strain=%.9g ordering=%s contact_ms=%.6g broad_phase_runs=%.6g\n",
       r.wall_ms_per_step, r.max_strain, last.mean_strain, r.max_penetration,
       last.self_intersections, last.energy, last.finite ? 1 : 0, r.steps, r.sim_time,
       r.iterations_per_step, r.predict_ms, r.collide_ms, r.project_ms, r.update_ms,
       pbd_cloth::toString(scene.solver.method), scene.solver.substeps, scene.solver.iterations,
       r.particles, r.max_self_intersections, r.sample_every, last.max_strain,
-      pbd_cloth::toString(scene.solver.ordering), r.contact_ms);
+      pbd_cloth::toString(scene.solver.ordering), r.contact_ms, r.broad_phase_runs);
 }
 
 // --target-max-strain / --target-mean-strain: the cheapest substeps x iterations that meet the
