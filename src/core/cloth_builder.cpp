@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <tuple>
 #include <utility>
 
 namespace pbd_cloth {
@@ -39,27 +40,37 @@ void addTriangles(const ClothConfig& cloth, ClothTopology& topology) {
   }
 }
 
+// Order of the Gauss-Seidel sweep. Row by row from row 0 (the pinned top edge of the shipped
+// scenes) so a pass still carries corrections down the cloth, but within a row in runs of
+// constraints that share no particle: horizontal links of even columns, of odd columns, then every
+// vertical link down to the next row. Consecutive projections of a run are independent, so the
+// processor overlaps them instead of waiting for each one's square root and division to reach the
+// next (a latency-bound loop otherwise; see doc/bench_summary.md, microbenchmarks).
 void addStretch(const ClothConfig& cloth, const Vec3Array& x, ClothTopology& topology) {
   const int rows = cloth.rows, cols = cloth.cols;
   auto add = [&](int i, int j) { topology.stretch.push_back({i, j, (x[i] - x[j]).norm()}); };
   for (int r = 0; r < rows; ++r) {
-    for (int c = 0; c < cols; ++c) {
-      const int i = r * cols + c;
-      if (c + 1 < cols) add(i, i + 1);
-      if (r + 1 < rows) add(i, i + cols);
+    for (int parity = 0; parity < 2; ++parity) {
+      for (int c = parity; c + 1 < cols; c += 2) add(r * cols + c, r * cols + c + 1);
+    }
+    if (r + 1 < rows) {
+      for (int c = 0; c < cols; ++c) add(r * cols + c, (r + 1) * cols + c);
     }
   }
   topology.structural_count = static_cast<int>(topology.stretch.size());
   if (!cloth.shear) return;
   // Shear: the diagonal each cell's triangles share (the mesh edges, as Jolt does). Both diagonals
-  // would make every cell a rigid planar frame and lock bending of an inextensible cloth.
+  // would make every cell a rigid planar frame and lock bending of an inextensible cloth. Cells
+  // two apart share no particle: even cells of a row, then odd ones.
   for (int r = 0; r + 1 < rows; ++r) {
-    for (int c = 0; c + 1 < cols; ++c) {
-      const int i = r * cols + c;
-      if ((r + c) % 2 == 0) {
-        add(i, i + cols + 1);
-      } else {
-        add(i + 1, i + cols);
+    for (int parity = 0; parity < 2; ++parity) {
+      for (int c = parity; c + 1 < cols; c += 2) {
+        const int i = r * cols + c;
+        if ((r + c) % 2 == 0) {
+          add(i, i + cols + 1);
+        } else {
+          add(i + 1, i + cols);
+        }
       }
     }
   }
@@ -90,6 +101,20 @@ void addBending(const Vec3Array& x, ClothTopology& topology) {
       topology.bend.push_back(bend);
     }
   }
+  // Sweep order as for the stretch links: row by row, and within a row in runs of hinges three
+  // columns apart of one kind (the edge along the row, across it, or the cell diagonal), which
+  // share no particle, so consecutive projections are independent.
+  const int cols = topology.cols;
+  const auto key = [cols](const BendConstraint& b) {
+    const int r0 = b.index[0] / cols, c0 = b.index[0] % cols;
+    const int r1 = b.index[1] / cols, c1 = b.index[1] % cols;
+    const int kind = r0 == r1 ? 0 : (c0 == c1 ? 1 : 2);
+    const int c = std::min(c0, c1);
+    return std::make_tuple(std::min(r0, r1), kind, c % 3, c);
+  };
+  std::stable_sort(
+      topology.bend.begin(), topology.bend.end(),
+      [&key](const BendConstraint& a, const BendConstraint& b) { return key(a) < key(b); });
 }
 
 }  // namespace
