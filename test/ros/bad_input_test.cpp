@@ -31,11 +31,7 @@ using pbd_cloth_test::StateRecorder;
 
 const double kNaN = std::numeric_limits<double>::quiet_NaN();
 const double kInf = std::numeric_limits<double>::infinity();
-
-const std::string& node() {
-  static const std::string name = pbd_cloth_test::nodeName();
-  return name;
-}
+using pbd_cloth_test::node;
 
 // Sends one bad input and checks the node's reaction: rejected_inputs grows, the simulation steps
 // on, and every position stays finite.

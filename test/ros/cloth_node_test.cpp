@@ -17,13 +17,9 @@
 namespace {
 
 using pbd_cloth_test::distance;
+using pbd_cloth_test::node;
 using pbd_cloth_test::Recorder;
 using pbd_cloth_test::StateRecorder;
-
-const std::string& node() {
-  static const std::string name = pbd_cloth_test::nodeName();
-  return name;
-}
 
 // The parts of the scene the checks need.
 struct Scene {

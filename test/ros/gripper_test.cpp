@@ -23,15 +23,11 @@ namespace {
 
 using pbd_cloth::ClothState;
 using pbd_cloth_test::distance;
+using pbd_cloth_test::node;
 using pbd_cloth_test::point;
 using pbd_cloth_test::PosePublisher;
 using pbd_cloth_test::Recorder;
 using pbd_cloth_test::StateRecorder;
-
-const std::string& node() {
-  static const std::string name = pbd_cloth_test::nodeName();
-  return name;
-}
 
 // The bottom-left corner (row 9, column 0) of the 10 x 10 cloth, hanging free.
 constexpr int kCorner = 90;

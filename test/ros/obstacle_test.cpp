@@ -16,17 +16,13 @@ namespace {
 
 using pbd_cloth::ClothState;
 using pbd_cloth_test::distance;
+using pbd_cloth_test::node;
 using pbd_cloth_test::point;
 using pbd_cloth_test::PosePublisher;
 using pbd_cloth_test::Recorder;
 using pbd_cloth_test::StateRecorder;
 using visualization_msgs::Marker;
 using visualization_msgs::MarkerArray;
-
-const std::string& node() {
-  static const std::string name = pbd_cloth_test::nodeName();
-  return name;
-}
 
 const Marker* findMarker(const MarkerArray& markers, const std::string& ns, int id) {
   for (const auto& marker : markers.markers) {

@@ -26,6 +26,12 @@ inline std::string nodeName(const std::string& fallback = "/cloth_node") {
   return ros::NodeHandle("~").getParam("node", name) ? name : fallback;
 }
 
+// nodeName() read once (after ros::init): the name every test of a client talks to.
+inline const std::string& node() {
+  static const std::string name = nodeName();
+  return name;
+}
+
 inline double distance(const geometry_msgs::Point& a, const geometry_msgs::Point& b) {
   return std::sqrt((a.x - b.x) * (a.x - b.x) + (a.y - b.y) * (a.y - b.y) +
                    (a.z - b.z) * (a.z - b.z));

@@ -14,13 +14,9 @@
 namespace {
 
 using pbd_cloth::ClothState;
+using pbd_cloth_test::node;
 using pbd_cloth_test::Recorder;
 using pbd_cloth_test::StateRecorder;
-
-const std::string& node() {
-  static const std::string name = pbd_cloth_test::nodeName();
-  return name;
-}
 
 TEST(SlowNode, SlowsDownKeepsPublishingAndWarns) {
   StateRecorder states(node() + "/state");
