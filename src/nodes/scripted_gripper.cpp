@@ -261,8 +261,23 @@ int main(int argc, char** argv) {
   nh_private.param("hold", config.hold, config.hold);
   nh_private.param("repeat", config.repeat, config.repeat);
   nh_private.param("tool_frame", config.tool_frame, config.tool_frame);
-  if (!(config.rate > 0.0)) {
-    ROS_FATAL("scripted_gripper: ~rate must be > 0, got %g", config.rate);
+  // A bad setting stops start-up with the key and its allowed range.
+  const auto check = [](bool ok, const char* key, const char* range, double value) {
+    if (!ok) ROS_FATAL("scripted_gripper: ~%s must be %s, got %g", key, range, value);
+    return ok;
+  };
+  if (!check(config.rate > 0.0, "rate", "> 0 (Hz)", config.rate) ||
+      !check(config.fold_duration > 0.0, "fold_duration", "> 0 (s)", config.fold_duration) ||
+      !check(config.fold_reach > 0.0 && config.fold_reach <= 1.0, "fold_reach", "in (0, 1]",
+             config.fold_reach) ||
+      !check(config.approach_height >= 0.0, "approach_height", ">= 0 (m)",
+             config.approach_height) ||
+      !check(config.lift >= 0.0, "lift", ">= 0 (m)", config.lift) ||
+      !check(config.settle >= 0.0, "settle", ">= 0 (s)", config.settle) ||
+      !check(config.hold >= 0.0, "hold", ">= 0 (s)", config.hold) ||
+      !check(config.grasp_index >= 0, "grasp_index", ">= 0", config.grasp_index) ||
+      !check(config.target_index >= -1, "target_index", ">= -1 (-1: the last particle)",
+             config.target_index)) {
     return 1;
   }
   ros::AsyncSpinner spinner(1);  // fills the latest state while run() moves the gripper
