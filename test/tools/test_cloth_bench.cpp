@@ -1,6 +1,6 @@
-// cloth_bench as a user runs it: the program, its output line, its files and its exit status.
-// The accuracy tests drive the core directly; these check the tool the charts and the README
-// figures come from.
+// cloth_bench as a user runs it (the program, its output line, its files and its exit status),
+// and the package's source style. The accuracy tests drive the core directly; these check the
+// tool the charts and the README figures come from.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
@@ -18,11 +18,10 @@ struct BenchRun {
   std::string out;  // stdout and stderr
 };
 
-BenchRun runBench(const std::string& arguments) {
-  const std::string command = std::string(CLOTH_BENCH) + " --config " + PBD_CLOTH_SOURCE_DIR +
-                              "/config/hanging.yaml " + arguments + " 2>&1";
+// Runs `command` in a shell; its stdout and stderr, and its exit status.
+BenchRun runShell(const std::string& command) {
   BenchRun run;
-  FILE* pipe = popen(command.c_str(), "r");
+  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
   if (pipe == nullptr) return run;
   std::array<char, 4096> buffer;
   std::size_t n;
@@ -31,6 +30,11 @@ BenchRun runBench(const std::string& arguments) {
   const int raw = pclose(pipe);
   run.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
   return run;
+}
+
+BenchRun runBench(const std::string& arguments) {
+  return runShell(std::string(CLOTH_BENCH) + " --config " + PBD_CLOTH_SOURCE_DIR +
+                  "/config/hanging.yaml " + arguments);
 }
 
 // key=value pairs of the lines of `text` (later lines win).
@@ -155,6 +159,16 @@ TEST(ClothBench, UnreachableTargetExitsWithThree) {
       runBench("--duration 0.5 --max-substeps 2 --target-max-strain 1e-9" + kSmall);
   EXPECT_EQ(run.status, 3) << run.out;
   EXPECT_NE(run.out.find("met=0"), std::string::npos) << run.out;
+}
+
+// The style rule of the package: every C++ file as the checked-in .clang-format formats it.
+// clang-format is one of the packages scripts/setup_deps installs.
+TEST(SourceStyle, EveryCppFileIsClangFormatted) {
+  const BenchRun run = runShell(std::string("cd '") + PBD_CLOTH_SOURCE_DIR +
+                                "' && find -L src include test \\( -name '*.cpp' -o -name '*.h' \\)"
+                                " -print0 | xargs -0 clang-format --dry-run --Werror");
+  EXPECT_EQ(run.status, 0) << "not clang-formatted (run clang-format -i on these):\n"
+                           << run.out.substr(0, 4000);
 }
 
 }  // namespace
