@@ -172,9 +172,9 @@ double Solver::projectBend(double h, Particles& p, const ClothTopology& topology
     // The vector constraint C = scale b (three rows, each with gradient scale K_k per vertex) has
     // the same energy as scale |b| but is linear in the positions: one projection solves it
     // exactly, and the multiplier is a vector, so a hinge that swings through flat keeps the
-    // direction of its accumulated force instead of flipping the sign of a scalar lambda (the
-    // whip of free edges with stiff bending). XPBD: dlambda = (-C - alpha lambda) / (w + alpha)
-    // (Macklin et al. 2016, eq. 18), row by row with the common w.
+    // direction of its accumulated force instead of flipping the sign of a scalar lambda, and no
+    // |b| is divided by. XPBD: dlambda = (-C - alpha lambda) / (w + alpha) (Macklin et al. 2016,
+    // eq. 18), row by row with the common w.
     const Vec3 constraint = con.scale * bendVector(con, p);
     Vec3 dlambda = xpbd ? Vec3((-constraint - alpha * bend_lambda_[c]) / (w + alpha))
                         : Vec3((-k / w) * constraint);
