@@ -79,7 +79,17 @@ class Solver {
   Vec3Array predicted_;            // x~ = x_prev + h v~ of the current substep (free particles)
   Vec3Array constraint_force_;
   StepStats stats_;
+  // Stretch constraints skipped in the current pass because their particles coincide, and the
+  // first of them; the last pass's figures become the step's stats.
+  void startDegenerateCount() {
+    degenerate_in_pass_ = 0;
+    first_degenerate_in_pass_ = -1;
+  }
+  void noteDegenerate(int constraint) {
+    if (degenerate_in_pass_++ == 0) first_degenerate_in_pass_ = constraint;
+  }
   int degenerate_in_pass_ = 0;
+  int first_degenerate_in_pass_ = -1;
 };
 
 }  // namespace pbd_cloth

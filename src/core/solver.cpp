@@ -127,7 +127,7 @@ double Solver::projectStretch(double h, Particles& p, const ClothTopology& topol
     if (length < kMinLength) {
       // Coincident particles: no direction to push along. Skipped for this pass (the other
       // constraints pull them apart) and reported, so it does not pass silently.
-      if (degenerate_in_pass_++ == 0) stats_.first_degenerate_constraint = c;
+      noteDegenerate(c);
       continue;
     }
     const Vec3 n = delta / length;
@@ -338,7 +338,7 @@ void Solver::countJacobiConstraints(const Particles& p, const ClothTopology& top
 double Solver::projectPass(double h, Particles& p, const ClothTopology& topology,
                            Collisions& collisions, bool /*first_pass*/) {
   // The count of the last pass is what the step reports: constraints still degenerate at its end.
-  degenerate_in_pass_ = 0;
+  startDegenerateCount();
   double max_change = projectStretch(h, p, topology);
   max_change = std::max(max_change, projectBend(h, p, topology));
   if (config_.ordering == Ordering::kJacobi) applyJacobi(p, max_change);
@@ -375,14 +375,14 @@ void Solver::massSpringSubstep(double h, double s_end, Particles& p, const Cloth
                                Collisions& collisions) {
   const double k = config_.spring_stiffness, damper = config_.spring_damping;
   for (int i = 0; i < p.size(); ++i) force_[i] = p.mass[i] * config_.gravity;
-  degenerate_in_pass_ = 0;
+  startDegenerateCount();
   const int count = static_cast<int>(topology.stretch.size());
   for (int c = 0; c < count; ++c) {
     const DistanceConstraint& con = topology.stretch[c];
     const Vec3 delta = p.position[con.i] - p.position[con.j];
     const double length = delta.norm();
     if (length < kMinLength) {  // coincident: no direction, reported as in projectStretch
-      if (degenerate_in_pass_++ == 0) stats_.first_degenerate_constraint = c;
+      noteDegenerate(c);
       continue;
     }
     const Vec3 n = delta / length;
@@ -425,8 +425,7 @@ void Solver::step(double dt, Particles& p, const ClothTopology& topology, Collis
   stats_.iterations = 0;
   stats_.predict_time = stats_.collide_time = stats_.project_time = stats_.update_time = 0.0;
   stats_.contact_time = 0.0;
-  stats_.first_degenerate_constraint = -1;
-  degenerate_in_pass_ = 0;
+  startDegenerateCount();
   p.step_start = p.position;
   if (config_.ordering == Ordering::kJacobi) countJacobiConstraints(p, topology);
 
@@ -489,7 +488,7 @@ void Solver::step(double dt, Particles& p, const ClothTopology& topology, Collis
   collisions.endStep();
   stats_.sim_time += dt;
   stats_.degenerate_constraints = degenerate_in_pass_;
-  if (degenerate_in_pass_ == 0) stats_.first_degenerate_constraint = -1;
+  stats_.first_degenerate_constraint = first_degenerate_in_pass_;
   stats_.step_wall_time = seconds(t_start, Clock::now());
 }
 
