@@ -5,12 +5,15 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
 
 namespace pbd_cloth {
+
+class TriangleMesh;  // triangle_mesh.h: a loaded mesh shape with its signed-distance queries
 
 // A bad scene key. what() names the key and the allowed range.
 class ConfigError : public std::runtime_error {
@@ -109,18 +112,86 @@ struct GripperConfig {
   std::vector<Waypoint> trajectory;  // grippers[i].trajectory
 };
 
-enum class ShapeType { kSphere, kBox, kCapsule, kPlane };
+enum class ShapeType { kSphere, kBox, kCapsule, kPlane, kCylinder, kMesh };
 const char* toString(ShapeType shape);
 
+// One collision shape: an obstacle of the scene, or one <collision> element of a robot link (then
+// `pose` is the element's origin in the link frame and `name` is "<link>/<index>").
 struct ObstacleConfig {
   std::string name;                       // obstacles[i].name
   ShapeType shape = ShapeType::kSphere;   // obstacles[i].shape
-  double radius = 0.1;                    // sphere, capsule
+  double radius = 0.1;                    // sphere, capsule, cylinder
   Eigen::Vector3d size{1.0, 1.0, 1.0};    // box: full edge lengths
-  double length = 0.5;                    // capsule: distance between the end-sphere centres
+  double length = 0.5;                    // capsule: between the end-sphere centres; cylinder: height
   Eigen::Vector3d normal{0.0, 0.0, 1.0};  // plane: unit normal
   double offset = 0.0;                    // plane: free side is n.p - offset >= 0
+  std::string mesh;                       // mesh: file path, file:// or package:// URI
+  Eigen::Vector3d scale{1.0, 1.0, 1.0};   // mesh: per-axis scale applied at load
+  // mesh: the loaded, scaled mesh with its distance structure (scene reader: scene_assets.h).
+  // Shared: copies of the scene (reset, live tuning) do not copy the mesh.
+  std::shared_ptr<const TriangleMesh> mesh_data;
   Pose pose;                              // obstacles[i].pose
+  std::string tf_frame;                   // obstacles[i].tf_frame: follow this frame (node)
+  double padding = 0.0;                   // m added around the shape (robot links: robot.padding)
+  // Friction of contacts with this shape; cloth.friction when not set (robot links: robot.friction).
+  bool has_friction = false;
+  FrictionConfig friction;
+};
+
+enum class JointType { kFixed, kRevolute, kContinuous, kPrismatic, kFloating, kPlanar };
+
+// A joint of the URDF's kinematic tree (floating and planar joints are held at their origin).
+struct RobotJoint {
+  std::string name;
+  JointType type = JointType::kFixed;
+  int parent_link = -1;  // index into RobotModel::links
+  int child_link = -1;
+  Pose origin;  // child joint frame in the parent link frame at position 0
+  Eigen::Vector3d axis{1.0, 0.0, 0.0};  // unit, in the joint frame
+  double lower = 0.0, upper = 0.0;      // limits (revolute, prismatic); not enforced by FK
+  int mimic_joint = -1;                 // position = multiplier * mimicked + offset
+  double mimic_multiplier = 1.0, mimic_offset = 0.0;
+};
+
+struct RobotLink {
+  std::string name;
+  // Every <collision> element of the link, in file order; pose = its origin in the link frame.
+  std::vector<ObstacleConfig> collisions;
+  int parent_joint = -1;  // -1 for the root link
+};
+
+// The URDF as the simulation needs it: links with their collision shapes and the joint tree.
+// Filled by the scene reader (scene_assets.h); forward kinematics in robot_model.cpp (core).
+struct RobotModel {
+  std::string name;
+  std::vector<RobotLink> links;
+  std::vector<RobotJoint> joints;
+  int root_link = -1;
+
+  int linkIndex(const std::string& link) const;    // -1 when absent
+  int jointIndex(const std::string& joint) const;  // -1 when absent
+  // Pose of every link in the scene frame with the root link at `root_pose`, for joint positions
+  // indexed like `joints` (fixed joints ignore theirs; mimic joints follow their joint). `out` is
+  // resized to links.size().
+  void linkPoses(const Pose& root_pose, const std::vector<double>& joint_positions,
+                 std::vector<Pose>& out) const;
+};
+
+struct JointWaypoint {
+  double t = 0.0;                                           // s since start
+  std::vector<std::pair<std::string, double>> positions;  // joint name -> rad or m
+};
+
+struct RobotConfig {
+  bool enabled = false;                        // true when the scene has a `robot` key
+  std::string description = "robot_description";  // robot.description (node: URDF parameter)
+  std::string urdf_file;                       // robot.urdf_file
+  std::vector<std::string> links;              // robot.links; empty = every link with <collision>
+  double padding = 0.0;                        // robot.padding (m)
+  FrictionConfig friction;                     // robot.friction
+  std::vector<JointWaypoint> joint_trajectory;  // robot.joint_trajectory
+  Pose pose;  // robot.pose: the root link in frame_id when posed by joint_trajectory (FK)
+  RobotModel model;  // the parsed URDF (scene_assets.h); links not selected by `links` are removed
 };
 
 struct BoundsConfig {
@@ -139,6 +210,10 @@ struct SceneConfig {
   std::vector<GripperConfig> grippers;
   BoundsConfig bounds;
   std::vector<ObstacleConfig> obstacles;
+  RobotConfig robot;
+  // What loading found that is allowed but worth a warning (an open mesh, a link without
+  // collision elements ...); cloth_bench prints them, the node logs them.
+  std::vector<std::string> load_warnings;
 };
 
 // Checks every value; throws ConfigError naming the key and the allowed range.

@@ -66,6 +66,23 @@ class Simulation {
   // The contact handling: candidate counts of the last step (collisions().stats()).
   const Collisions& collisions() const { return collisions_; }
 
+  // Robot links (scene.robot.model.links; index -1 means "no such link"). Only links with collision
+  // elements collide. Without live poses the links follow robot.joint_trajectory by forward
+  // kinematics (robot.pose places the root); a live pose takes that link off the trajectory.
+  int robotLinkCount() const;
+  int robotLinkIndex(const std::string& name) const;
+  const std::string& robotLinkName(int link) const;
+  bool robotLinkHasCollision(int link) const;
+  // The pose the link reaches at the end of the next step (moved as a kinematic body, swept
+  // continuously). A non-finite pose is ignored.
+  void setRobotLinkPose(int link, const Pose& pose);
+  // The link's pose now (end of the last step).
+  const Pose& robotLinkPose(int link) const;
+  // A disabled link does not collide (the node disables a link whose tf is missing). When it is
+  // enabled again it is placed at the next pose given, without sweeping the way in between.
+  void setRobotLinkEnabled(int link, bool enabled);
+  bool robotLinkEnabled(int link) const;
+
   // Live tuning: applied at the next step. Throws ConfigError on an invalid value.
   void setSolverConfig(const SolverConfig& solver);
   void setClothCompliance(double stretch_compliance, double bend_compliance);

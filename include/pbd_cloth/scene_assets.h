@@ -1,0 +1,39 @@
+// Loading the files a scene refers to, beside the YAML reader: mesh files of obstacles and robot
+// links (STL, OBJ, DAE, PLY through assimp; paths, file:// and package:// URIs through
+// resource_retriever) and the robot's URDF (ROS's urdf package, which parses with urdfdom). No ROS
+// master is needed, so cloth_bench and the core tests use it as the node does.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "pbd_cloth/scene_config.h"
+#include "pbd_cloth/triangle_mesh.h"
+
+namespace pbd_cloth {
+
+// Loads a mesh file (`uri`: a path, file:// or package://), scaled per axis. Throws ConfigError
+// with `key` (e.g. "obstacles[2].mesh" or "robot link 'forearm' collision 0 mesh") naming the
+// file when it is missing, unreadable, not a mesh, or has no triangles. An open mesh loads (as a
+// two-sided shell) and appends a warning naming the file and its boundary edge count to
+// `warnings`.
+std::shared_ptr<const TriangleMesh> loadMesh(const std::string& uri, const Eigen::Vector3d& scale,
+                                             const std::string& key,
+                                             std::vector<std::string>& warnings);
+
+// Loads every obstacle mesh of the scene (shape: mesh) into its mesh_data.
+void loadObstacleMeshes(SceneConfig& scene);
+
+// Parses `urdf_xml` (the text of a URDF) into scene.robot.model: links, every <collision> element
+// (box, sphere, cylinder, mesh with scale; origin), joints. Applies robot.links (a name the URDF
+// lacks throws ConfigError "robot.links[i]"), robot.padding and robot.friction, and loads the
+// link meshes. `source` names where the text came from (the parameter or file) in messages.
+// Throws ConfigError naming `source` when the URDF does not parse, and naming the link for a bad
+// mesh or an unsupported geometry.
+void loadRobot(SceneConfig& scene, const std::string& urdf_xml, const std::string& source);
+
+// loadRobot with the text of scene.robot.urdf_file (ConfigError "robot.urdf_file" when it cannot
+// be read).
+void loadRobotFile(SceneConfig& scene);
+
+}  // namespace pbd_cloth
