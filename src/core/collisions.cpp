@@ -25,18 +25,42 @@ void Collisions::configure(const SceneConfig& scene) {
   thickness_ = scene.cloth.thickness;
   self_collision_ = scene.cloth.self_collision;
   gravity_ = scene.solver.gravity;
-  obstacles_ = scene.obstacles;
+  obstacles_.clear();
   obstacle_targets_.clear();
   shapes_.clear();
+  obstacle_friction_.clear();
+  enabled_.clear();
+  teleport_.clear();
   frame_begin_.clear();
-  for (const auto& obstacle : obstacles_) {
-    obstacle_targets_.push_back(obstacle.pose);
-    shapes_.push_back(makeShape(obstacle));
-    frame_begin_.push_back(frameFromPose(obstacle.pose));
+  frame_end_.clear();
+  obstacle_lo_.clear();
+  obstacle_hi_.clear();
+  for (const auto& obstacle : scene.obstacles) addCollider(obstacle);
+}
+
+int Collisions::addCollider(const ObstacleConfig& collider) {
+  if (collider.shape == ShapeType::kMesh && !collider.mesh_data) {
+    throw ConfigError(collider.name + ".mesh",
+                      "the mesh '" + collider.mesh + "' is not loaded (scene_assets.h loadMesh)");
   }
-  frame_end_ = frame_begin_;
-  obstacle_lo_.assign(obstacles_.size(), Vec3::Zero());
-  obstacle_hi_.assign(obstacles_.size(), Vec3::Zero());
+  obstacles_.push_back(collider);
+  obstacle_targets_.push_back(collider.pose);
+  shapes_.push_back(makeShape(collider));
+  obstacle_friction_.push_back(collider.has_friction ? collider.friction : friction_);
+  enabled_.push_back(1);
+  teleport_.push_back(0);
+  frame_begin_.push_back(frameFromPose(collider.pose));
+  frame_end_.push_back(frame_begin_.back());
+  obstacle_lo_.push_back(Vec3::Zero());
+  obstacle_hi_.push_back(Vec3::Zero());
+  return static_cast<int>(obstacles_.size()) - 1;
+}
+
+void Collisions::setFriction(const FrictionConfig& friction) {
+  friction_ = friction;
+  for (std::size_t k = 0; k < obstacles_.size(); ++k) {
+    if (!obstacles_[k].has_friction) obstacle_friction_[k] = friction;
+  }
 }
 
 bool Collisions::setObstacleTarget(int obstacle, const Pose& target) {
@@ -46,7 +70,16 @@ bool Collisions::setObstacleTarget(int obstacle, const Pose& target) {
   }
   obstacle_targets_[obstacle].position = target.position;
   obstacle_targets_[obstacle].orientation = target.orientation.normalized();
+  if (teleport_[obstacle]) {
+    obstacles_[obstacle].pose = obstacle_targets_[obstacle];
+    teleport_[obstacle] = 0;
+  }
   return true;
+}
+
+void Collisions::setObstacleEnabled(int obstacle, bool enabled) {
+  if (enabled && !enabled_[obstacle]) teleport_[obstacle] = 1;
+  enabled_[obstacle] = enabled ? 1 : 0;
 }
 
 void Collisions::prepare(const Particles& particles, const ClothTopology& topology) {
@@ -210,6 +243,7 @@ void Collisions::preStabilizeObstacles(Particles& p, double max_shift) {
   for (int i = 0; i < p.size(); ++i) {
     if (p.inverse_mass[i] == 0.0) continue;
     for (std::size_t k = 0; k < count; ++k) {
+      if (!enabled_[k]) continue;
       Vec3 normal;
       const double clearance =
           signedDistance(shapes_[k], frame_end_[k].toLocal(p.position[i]), normal) - p.radius[i];
@@ -238,6 +272,7 @@ double Collisions::projectObstacles(Particles& p) {
     Vec3& x = p.position[i];
     const double r = p.radius[i];
     for (std::size_t k = 0; k < count; ++k) {
+      if (!enabled_[k]) continue;
       const std::size_t slot = static_cast<std::size_t>(i) * count + k;
       ContactState& state = obstacle_contacts_[slot];
       const bool pushed = state.substep == substep_ && state.depth > 0.0;
@@ -289,7 +324,7 @@ double Collisions::projectObstacles(Particles& p) {
       if (state.frictionDepth() > 0.0) {
         // The shape carries the point under the particle along with it: the relative
         // displacement is measured from there, so a moving shape drags what rests on it.
-        x += frictionCorrection(x - end.toWorld(state.base), state, friction_);
+        x += frictionCorrection(x - end.toWorld(state.base), state, obstacle_friction_[k]);
       }
     }
   }
@@ -325,6 +360,7 @@ double Collisions::maxPenetration(const Particles& particles, const ClothTopolog
     }
   }
   for (std::size_t k = 0; k < shapes_.size(); ++k) {
+    if (!enabled_[k]) continue;
     const Frame frame = frameFromPose(obstacles_[k].pose);
     for (int i = 0; i < particles.size(); ++i) {
       if (particles.inverse_mass[i] == 0.0) continue;  // prescribed: not the solver's to fix

@@ -47,6 +47,10 @@ const char* toString(ShapeType shape) {
       return "capsule";
     case ShapeType::kPlane:
       return "plane";
+    case ShapeType::kCylinder:
+      return "cylinder";
+    case ShapeType::kMesh:
+      return "mesh";
   }
   return "unknown";
 }
@@ -274,6 +278,13 @@ void validateObstacle(const std::string& key, const ObstacleConfig& o,
       checkFinite(key + ".normal", o.normal);
       if (o.normal.norm() == 0.0) throw ConfigError(key + ".normal", "must be non-zero");
       checkFinite(key + ".offset", o.offset);
+      break;
+    case ShapeType::kCylinder:
+      checkNumber(key + ".radius", o.radius, kPositive);
+      checkNumber(key + ".length", o.length, kPositive);
+      break;
+    case ShapeType::kMesh:
+      if (o.mesh.empty()) throw ConfigError(key + ".mesh", "must name a mesh file");
       break;
   }
 }
