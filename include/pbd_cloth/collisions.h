@@ -128,6 +128,11 @@ class Collisions {
   Vec3Array obstacle_hi_;
   std::vector<ContactState> obstacle_contacts_;  // [particle * obstacles + obstacle]
   std::vector<double> obstacle_allowance_;       // same layout: allowanceFor, this step
+  std::vector<int> mesh_hint_;  // same layout: last closest triangle (mesh shapes' search hint)
+  // Same layout, mesh shapes: the last distance computed and where (local frame), a free lower
+  // bound on the next one.
+  std::vector<double> mesh_distance_;
+  Vec3Array mesh_point_;
 
   // Step and substep.
   double dt_ = 0.0;

@@ -57,7 +57,9 @@ void worldBounds(const Shape& shape, const Frame& frame, Vec3& lo, Vec3& hi);
 // normal of the nearest surface point (inside: the direction of the shortest way out). The distance
 // is exact for every shape (the mesh's by closest-triangle search), hence 1-Lipschitz, which
 // sweepSphere relies on; padding subtracts a constant and keeps that.
-double signedDistance(const Shape& shape, const Vec3& x, Vec3& normal);
+// `hint`: the mesh's search hint (TriangleMesh::signedDistance), kept per particle by the caller;
+// other shapes ignore it.
+double signedDistance(const Shape& shape, const Vec3& x, Vec3& normal, int* hint = nullptr);
 double signedDistance(const Shape& shape, const Vec3& x);
 
 // Continuous collision: the first fraction t in [0, 1] at which a sphere of radius r moving along
@@ -68,6 +70,6 @@ double signedDistance(const Shape& shape, const Vec3& x);
 // `start_distance` and `start_normal` are signedDistance at a (the caller has them already); on a
 // hit, `normal` is the outward normal at the entry point.
 bool sweepSphere(const Shape& shape, const Vec3& a, const Vec3& b, double r, double start_distance,
-                 const Vec3& start_normal, double& t, Vec3& normal);
+                 const Vec3& start_normal, double& t, Vec3& normal, int* hint = nullptr);
 
 }  // namespace pbd_cloth

@@ -35,7 +35,11 @@ class TriangleMesh {
 
   // Signed distance of x (mesh frame) to the surface, negative inside (closed meshes only), and
   // the outward unit normal of the shortest way to the surface.
-  double signedDistance(const Vec3& x, Vec3& normal) const;
+  // `hint` (optional, in and out): a triangle likely to be near x, e.g. the closest one of the same
+  // particle's last query. Its distance bounds the search from the start, so the tree walk prunes
+  // almost everything for a point that moved little (temporal coherence). Any value is safe: an
+  // out-of-range hint is ignored; on return it holds the closest triangle.
+  double signedDistance(const Vec3& x, Vec3& normal, int* hint = nullptr) const;
 
   bool closed() const { return boundary_edges_ == 0; }
   int boundaryEdges() const { return boundary_edges_; }

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <climits>
 #include <cmath>
+#include <limits>
 
 namespace pbd_cloth {
 
@@ -86,6 +87,9 @@ void Collisions::prepare(const Particles& particles, const ClothTopology& topolo
   const int n = particles.size();
   obstacle_contacts_.assign(static_cast<std::size_t>(n) * obstacles_.size(), ContactState());
   obstacle_allowance_.assign(obstacle_contacts_.size(), 0.0);
+  mesh_hint_.assign(obstacle_contacts_.size(), -1);
+  mesh_distance_.assign(obstacle_contacts_.size(), -std::numeric_limits<double>::infinity());
+  mesh_point_.assign(obstacle_contacts_.size(), Vec3::Zero());
   box_lo_.assign(n, Vec3::Zero());
   box_hi_.assign(n, Vec3::Zero());
   particle_contacts_.reserve(particles);
@@ -287,14 +291,27 @@ double Collisions::projectObstacles(Particles& p) {
       const Frame& begin = frame_begin_[k];
       const Frame& end = frame_end_[k];
       const Vec3 b = end.toLocal(x);  // where the particle is, relative to the shape now
-      Vec3 normal_b;
-      const double clearance = signedDistance(shape, b, normal_b) - r;
       const Vec3 a = begin.toLocal(p.substep_start[i]);  // ... and where it was
+      const bool mesh = shape.type == ShapeType::kMesh;
+      if (mesh && !pushed) {
+        // A mesh query costs a tree search; the last one bounds this one for free. The distance
+        // is 1-Lipschitz, so d(b) >= d(b_last) - |b - b_last| (local frame): when even that
+        // bound clears the segment, the test below would skip it too.
+        const double lower = mesh_distance_[slot] - (b - mesh_point_[slot]).norm() - r;
+        if (lower >= (b - a).norm()) continue;
+      }
+      Vec3 normal_b;
+      int* hint = &mesh_hint_[slot];
+      const double clearance = signedDistance(shape, b, normal_b, hint) - r;
+      if (mesh) {
+        mesh_distance_[slot] = clearance + r;
+        mesh_point_[slot] = b;
+      }
       // The distance is 1-Lipschitz: a segment whose end is farther from the surface than its
       // length never touched the shape (unless it was pushed out earlier in this substep).
       if (clearance >= (b - a).norm() && !pushed) continue;
       Vec3 normal_a;
-      const double start_distance = signedDistance(shape, a, normal_a);
+      const double start_distance = signedDistance(shape, a, normal_a, hint);
       // The window's base is the particle's place on the shape when it began: carried by the
       // shape, it is the point under the particle that friction holds it to.
       if (state.beginSubstep(substep_, step_, start_distance < (1.0 + kTouchGap) * r)) {
@@ -307,7 +324,7 @@ double Collisions::projectObstacles(Particles& p) {
       Vec3 normal_entry;
       if (allowance > 0.0) {
         c = clearance + allowance;  // started inside: only not deeper
-      } else if (sweepSphere(shape, a, b, r, start_distance, normal_a, t, normal_entry)) {
+      } else if (sweepSphere(shape, a, b, r, start_distance, normal_a, t, normal_entry, hint)) {
         if (!(clearance < 0.0 && normal_b.dot(normal_entry) > 0.0)) {
           // Crossed or cut through: back onto the tangent plane where the sphere entered.
           c = (b - (a + t * (b - a))).dot(normal_entry);

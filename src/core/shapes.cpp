@@ -105,7 +105,7 @@ double cylinderDistance(double r, double h, const Vec3& x, Vec3& normal) {
   return dz;
 }
 
-double unpaddedDistance(const Shape& shape, const Vec3& x, Vec3& normal) {
+double unpaddedDistance(const Shape& shape, const Vec3& x, Vec3& normal, int* hint) {
   switch (shape.type) {
     case ShapeType::kPlane:
       normal = shape.normal;
@@ -143,7 +143,7 @@ double unpaddedDistance(const Shape& shape, const Vec3& x, Vec3& normal) {
     case ShapeType::kCylinder:
       return cylinderDistance(shape.radius, shape.half_length, x, normal);
     case ShapeType::kMesh:
-      return shape.mesh->signedDistance(x, normal);
+      return shape.mesh->signedDistance(x, normal, hint);
   }
   normal = Vec3::UnitZ();
   return 0.0;
@@ -151,8 +151,8 @@ double unpaddedDistance(const Shape& shape, const Vec3& x, Vec3& normal) {
 
 }  // namespace
 
-double signedDistance(const Shape& shape, const Vec3& x, Vec3& normal) {
-  return unpaddedDistance(shape, x, normal) - shape.padding;
+double signedDistance(const Shape& shape, const Vec3& x, Vec3& normal, int* hint) {
+  return unpaddedDistance(shape, x, normal, hint) - shape.padding;
 }
 
 double signedDistance(const Shape& shape, const Vec3& x) {
@@ -161,7 +161,7 @@ double signedDistance(const Shape& shape, const Vec3& x) {
 }
 
 bool sweepSphere(const Shape& shape, const Vec3& a, const Vec3& b, double r, double start_distance,
-                 const Vec3& start_normal, double& t, Vec3& normal) {
+                 const Vec3& start_normal, double& t, Vec3& normal, int* hint) {
   const Vec3 direction = b - a;
   const double length = direction.norm();
   const double tolerance = kSweepTolerance * r;
@@ -173,7 +173,7 @@ bool sweepSphere(const Shape& shape, const Vec3& a, const Vec3& b, double r, dou
     if (length == 0.0) return false;
     t += clearance / length;
     if (t > 1.0) return false;
-    clearance = signedDistance(shape, a + t * direction, normal) - r;
+    clearance = signedDistance(shape, a + t * direction, normal, hint) - r;
   }
   return false;
 }

@@ -193,7 +193,7 @@ int TriangleMesh::build(int begin, int end, std::vector<Vec3>& centroids) {
   return index;
 }
 
-double TriangleMesh::signedDistance(const Vec3& x, Vec3& normal) const {
+double TriangleMesh::signedDistance(const Vec3& x, Vec3& normal, int* hint) const {
   // Depth-first, nearer child first, pruning boxes farther than the best triangle so far. A fixed
   // stack: the tree is balanced (median splits), so its depth is log2 of the triangle count.
   int stack[64];
@@ -204,6 +204,24 @@ double TriangleMesh::signedDistance(const Vec3& x, Vec3& normal) const {
   int best_triangle = 0;
   Feature best_feature = Feature::kFace;
   int best_index = 0;
+  const auto test_triangle = [&](int t) {
+    const Triangle& tri = triangles_[t];
+    Feature feature;
+    int index;
+    const Vec3 c = closestOnTriangle(x, vertices_[tri[0]], vertices_[tri[1]], vertices_[tri[2]],
+                                     feature, index);
+    const double d2 = (x - c).squaredNorm();
+    if (d2 < best) {
+      best = d2;
+      closest = c;
+      best_triangle = t;
+      best_feature = feature;
+      best_index = index;
+    }
+  };
+  if (hint != nullptr && *hint >= 0 && *hint < static_cast<int>(triangles_.size())) {
+    test_triangle(*hint);
+  }
   while (top > 0) {
     const Node& node = nodes_[stack[--top]];
     if (boxDistanceSquared(x, node.lo, node.hi) >= best) continue;
@@ -239,6 +257,7 @@ double TriangleMesh::signedDistance(const Vec3& x, Vec3& normal) const {
       if (dr < best) stack[top++] = node.right;
     }
   }
+  if (hint != nullptr) *hint = best_triangle;
   Vec3 pseudo_normal = Vec3::Zero();
   switch (best_feature) {
     case Feature::kFace:
