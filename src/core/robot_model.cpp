@@ -1,12 +1,52 @@
-// Forward kinematics of the URDF's joint tree: each link's pose is its parent's pose, composed with
-// the joint's origin and the joint's own motion (rotation about or translation along its axis).
+// Forward kinematics of the URDF's joint tree: a link's pose is its parent's pose composed with its
+// parent joint's origin and motion. Called every step, so it allocates nothing once `out` has its
+// size, and it does not rely on the link order: each link walks up its own chain to the root
+// (n links x depth compositions: a few dozen for an arm, cheaper than keeping a visit order).
 #include <Eigen/Geometry>
-#include <cmath>
-#include <limits>
+#include <stdexcept>
 
 #include "pbd_cloth/scene_config.h"
 
 namespace pbd_cloth {
+namespace {
+
+// The position of joint `j`: its own, or for a mimic joint multiplier * mimicked + offset (URDF's
+// <mimic>), following chains of mimic joints. Missing entries of `positions` read as 0.
+double jointPosition(const std::vector<RobotJoint>& joints, const std::vector<double>& positions,
+                     int j) {
+  double multiplier = 1.0;
+  double offset = 0.0;
+  // A mimic chain longer than the joint count is a cycle.
+  for (std::size_t hops = 0; joints[j].mimic_joint >= 0; ++hops) {
+    if (hops >= joints.size()) throw std::logic_error("RobotModel: cycle of mimic joints");
+    offset += multiplier * joints[j].mimic_offset;
+    multiplier *= joints[j].mimic_multiplier;
+    j = joints[j].mimic_joint;
+  }
+  const double own = static_cast<std::size_t>(j) < positions.size() ? positions[j] : 0.0;
+  return multiplier * own + offset;
+}
+
+// The child link frame in the parent link frame: origin, then the joint's motion along its axis.
+Pose jointTransform(const RobotJoint& joint, double position) {
+  Pose motion;
+  switch (joint.type) {
+    case JointType::kRevolute:
+    case JointType::kContinuous:
+      motion.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(position, joint.axis));
+      break;
+    case JointType::kPrismatic:
+      motion.position = position * joint.axis;
+      break;
+    case JointType::kFixed:
+    case JointType::kFloating:  // no state in the URDF: held at the origin
+    case JointType::kPlanar:
+      break;
+  }
+  return joint.origin.compose(motion);
+}
+
+}  // namespace
 
 int RobotModel::linkIndex(const std::string& link) const {
   for (std::size_t k = 0; k < links.size(); ++k) {
@@ -22,62 +62,25 @@ int RobotModel::jointIndex(const std::string& joint) const {
   return -1;
 }
 
-namespace {
-
-// The joint's motion at position q, in the joint frame.
-Pose jointMotion(const RobotJoint& joint, double q) {
-  Pose motion;
-  switch (joint.type) {
-    case JointType::kRevolute:
-    case JointType::kContinuous:
-      motion.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(q, joint.axis));
-      break;
-    case JointType::kPrismatic:
-      motion.position = q * joint.axis;
-      break;
-    case JointType::kFixed:
-    case JointType::kFloating:  // held at the origin: the URDF gives them no single axis to follow
-    case JointType::kPlanar:
-      break;
-  }
-  return motion;
-}
-
-}  // namespace
-
-// Links are posed in tree order from the root: a link is posed once its parent is. URDF trees are
-// shallow, so repeated sweeps over the joints (no recursion, no allocation) cost little.
 void RobotModel::linkPoses(const Pose& root_pose, const std::vector<double>& joint_positions,
                            std::vector<Pose>& out) const {
   out.resize(links.size());
-  if (links.empty()) return;
-  // Mark every link unposed with a NaN, then pose the root and sweep until nothing changes.
-  for (Pose& pose : out) pose.position.x() = std::numeric_limits<double>::quiet_NaN();
-  if (root_link >= 0) out[root_link] = root_pose;
-  bool changed = true;
-  while (changed) {
-    changed = false;
-    for (const RobotJoint& joint : joints) {
-      if (joint.parent_link < 0 || joint.child_link < 0) continue;
-      const Pose& parent = out[joint.parent_link];
-      if (std::isnan(parent.position.x()) || !std::isnan(out[joint.child_link].position.x())) {
-        continue;
-      }
-      const std::size_t index = static_cast<std::size_t>(&joint - joints.data());
-      double q = index < joint_positions.size() ? joint_positions[index] : 0.0;
-      if (joint.mimic_joint >= 0) {
-        const double mimicked = static_cast<std::size_t>(joint.mimic_joint) < joint_positions.size()
-                                    ? joint_positions[joint.mimic_joint]
-                                    : 0.0;
-        q = joint.mimic_multiplier * mimicked + joint.mimic_offset;
-      }
-      out[joint.child_link] = parent.compose(joint.origin).compose(jointMotion(joint, q));
-      changed = true;
+  const int joint_count = static_cast<int>(joints.size());
+  for (std::size_t k = 0; k < links.size(); ++k) {
+    // The link in the root link's frame, built from the link upwards: each parent joint's
+    // transform is applied on the left of what is below it.
+    Pose in_root;
+    int link = static_cast<int>(k);
+    for (std::size_t depth = 0;; ++depth) {
+      const int j = links[link].parent_joint;
+      if (j < 0 || j >= joint_count) break;
+      if (depth >= links.size()) throw std::logic_error("RobotModel: cycle in the joint tree");
+      in_root =
+          jointTransform(joints[j], jointPosition(joints, joint_positions, j)).compose(in_root);
+      link = joints[j].parent_link;
+      if (link < 0 || link >= static_cast<int>(links.size())) break;
     }
-  }
-  // Links outside the root's tree (a malformed model) stay where the root is.
-  for (Pose& pose : out) {
-    if (std::isnan(pose.position.x())) pose = root_pose;
+    out[k] = root_pose.compose(in_root);
   }
 }
 

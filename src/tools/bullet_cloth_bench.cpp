@@ -372,7 +372,11 @@ int run(const Options& options) {
   for (const std::string& assignment : options.overrides) {
     pbd_cloth::applyOverride(root, assignment);
   }
-  pbd_cloth::SceneConfig scene = pbd_cloth::sceneFromYaml(root);
+  pbd_cloth::SceneConfig scene =
+      pbd_cloth::sceneFromYaml(root, pbd_cloth::sceneFileDirectory(options.config));
+  for (const std::string& warning : scene.load_warnings) {
+    std::fprintf(stderr, "warning: %s\n", warning.c_str());
+  }
   scene.granular.count = 0;  // the cloth only: Bullet's node i is pbd_cloth's particle i
   if (!options.quiet) warnAboutUnsupported(scene);
 
