@@ -93,7 +93,8 @@ ClothRos::ClothRos(ros::NodeHandle nh, ros::NodeHandle nh_private)
   if (config_.publish_clock) {
     // The node is the clock: simulated time 0 is ROS time 0, so /clock starts at 0 on every run
     // and a recording made this way has the same stamps each time.
-    clock_pub_ = nh_.advertise<rosgraph_msgs::Clock>("/clock", 10);
+    // A queue of 100: at thousands of steps per second a follower's connection may lag a little.
+    clock_pub_ = nh_.advertise<rosgraph_msgs::Clock>("/clock", 100);
     if (config_.max_real_time_factor > 0.0) {
       ROS_INFO("Publishing /clock from 0, at most %g simulated seconds per wall second.",
                config_.max_real_time_factor);
@@ -270,8 +271,9 @@ void ClothRos::stepCallback(const ros::WallTimerEvent& /*event*/) {
   if (plan.skipped > 0.0) {
     ROS_WARN_THROTTLE(10.0,
                       "The simulation was %.3f s (%.0f steps) behind ROS time: it runs %d steps "
-                      "(~max_catch_up_steps) to catch up and skips the other %.3f s, so simulated "
-                      "time slows down (real-time factor %.2f).",
+                      "(~max_catch_up_steps) and skips the other %.3f s of ROS time. Either /clock "
+                      "jumped ahead or the machine cannot step at step_rate (real-time factor "
+                      "%.2f).",
                       plan.behind, plan.behind * sim_->scene().step_rate, plan.steps, plan.skipped,
                       real_time_factor_.value());
   }
