@@ -2,9 +2,11 @@
 
 #include <algorithm>
 #include <cctype>
+#include <chrono>
 #include <sstream>
 
 #include <geometry_msgs/WrenchStamped.h>
+#include <rosgraph_msgs/Clock.h>
 #include <visualization_msgs/MarkerArray.h>
 #include <boost/make_shared.hpp>
 
@@ -53,6 +55,8 @@ ClothRos::ClothRos(ros::NodeHandle nh, ros::NodeHandle nh_private)
     throw;
   }
   const SceneConfig& scene = sim_->scene();
+  step_clock_ = StepClock(StepClock::Config{1.0 / scene.step_rate, config_.max_catch_up_steps});
+  publish_ticks_ = PublishTicks(scene.publish_rate);
   ROS_INFO(
       "Cloth %dx%d (%d particles, %d triangles), %s with %d substeps, stepping at %.0f Hz, "
       "publishing at %.0f Hz in frame '%s'.",
@@ -81,22 +85,43 @@ ClothRos::ClothRos(ros::NodeHandle nh, ros::NodeHandle nh_private)
   diagnostics_ = std::make_unique<ClothDiagnostics>(nh_, nh_private_, nh_private_.getNamespace(),
                                                     config_.diagnostics);
 
-  // roscpp never queues missed timer ticks: when a step overruns its period the next one simply
-  // starts later, and each step advances the simulation by the same 1/step_rate, so the simulation
-  // slows down (real-time factor < 1, reported in ~state and the diagnostics) instead of trying to
-  // catch up.
-  step_timer_ =
-      nh_.createWallTimer(ros::WallDuration(1.0 / scene.step_rate), &ClothRos::stepCallback, this);
-  publish_timer_ = nh_.createWallTimer(ros::WallDuration(1.0 / scene.publish_rate),
-                                       &ClothRos::publishCallback, this);
   diagnostics_timer_ = nh_.createWallTimer(ros::WallDuration(diagnostics_->period()),
                                            &ClothRos::diagnosticsCallback, this);
   input_spinner_ = std::make_unique<ros::AsyncSpinner>(1, &input_queue_);
   input_spinner_->start();
+
+  if (config_.publish_clock) {
+    // The node is the clock: simulated time 0 is ROS time 0, so /clock starts at 0 on every run
+    // and a recording made this way has the same stamps each time.
+    // A queue of 100: at thousands of steps per second a follower's connection may lag a little.
+    clock_pub_ = nh_.advertise<rosgraph_msgs::Clock>("/clock", 100);
+    if (config_.max_real_time_factor > 0.0) {
+      ROS_INFO("Publishing /clock from 0, at most %g simulated seconds per wall second.",
+               config_.max_real_time_factor);
+    } else {
+      ROS_INFO("Publishing /clock from 0, stepping as fast as the machine allows.");
+    }
+    clock_running_ = true;
+    clock_thread_ = std::thread(&ClothRos::clockLoop, this);
+  } else {
+    // Polled at twice the step rate: a step runs at most half a period after ROS time reached its
+    // end. ROS time itself (/clock) is not a timer source here, since a ros::Timer on a clock that
+    // jumps back or stops would stall rather than tell the node.
+    if (ros::Time::isSimTime()) {
+      ROS_INFO("/use_sim_time is true: stepping on /clock.");
+    }
+    step_timer_ = nh_.createWallTimer(ros::WallDuration(0.5 / scene.step_rate),
+                                      &ClothRos::stepCallback, this);
+  }
 }
 
 ClothRos::~ClothRos() {
-  // Before any member goes: a pose callback in flight uses the simulation and the tf buffer.
+  // Before any member goes: the clock thread and a pose callback in flight use the simulation,
+  // the publishers and the tf buffer.
+  clock_running_ = false;
+  if (clock_thread_.joinable()) {
+    clock_thread_.join();
+  }
   input_spinner_->stop();
 }
 
@@ -164,12 +189,16 @@ void ClothRos::poseCallback(Body& body, const geometry_msgs::PoseStamped& msg) {
   if (!stamp.isZero()) {
     body.last_stamp = stamp;
   }
-  body.follower.addSample(currentPose(body), pose, ros::WallTime::now().toSec());
+  body.follower.addSample(currentPose(body), pose, inputTime());
+}
+
+double ClothRos::inputTime() const {
+  return config_.publish_clock ? stateTime().toSec() : ros::Time::now().toSec();
 }
 
 // Grippers that follow a tf frame take its latest transform every step; each new stamp is a sample
 // for the follower, exactly like a pose message.
-void ClothRos::pollTfFrames() {
+void ClothRos::pollTfFrames(double arrival) {
   for (Body& body : bodies_) {
     if (body.tf_frame.empty()) {
       continue;
@@ -194,7 +223,7 @@ void ClothRos::pollTfFrames() {
     // A static frame keeps stamp 0: it becomes a sample once, then the gripper stays there.
     if (!body.follower.active() || stamp != body.last_stamp) {
       body.last_stamp = stamp;
-      body.follower.addSample(currentPose(body), pose, ros::WallTime::now().toSec());
+      body.follower.addSample(currentPose(body), pose, arrival);
     }
   }
 }
@@ -218,9 +247,85 @@ void ClothRos::driveBodies(double step_end) {
 
 void ClothRos::stepCallback(const ros::WallTimerEvent& /*event*/) {
   std::lock_guard<std::mutex> lock(mutex_);
+  const ros::Time now = ros::Time::now();
+  const StepClock::Plan plan = step_clock_.update(now, sim_->time());
+  if (plan.waiting) {
+    if (!waiting_for_clock_) {
+      ROS_INFO("/use_sim_time is true and no /clock has arrived yet: waiting for /clock to step.");
+      waiting_for_clock_ = true;
+    }
+    return;
+  }
+  if (waiting_for_clock_) {
+    ROS_INFO("/clock arrived (%.3f s): stepping.", now.toSec());
+    waiting_for_clock_ = false;
+  }
+  if (plan.jumped_back) {
+    std::ostringstream detail;
+    detail << "ROS time went back by " << plan.jump << " s to " << now
+           << " (a looping bag or a restarted simulator?)";
+    rejections_.reject("/clock", RejectReason::kClockJump, detail.str());
+    resetSimulation(now);
+    return;
+  }
+  if (plan.skipped > 0.0) {
+    ROS_WARN_THROTTLE(10.0,
+                      "The simulation was %.3f s (%.0f steps) behind ROS time: it runs %d steps "
+                      "(~max_catch_up_steps) and skips the other %.3f s of ROS time. Either /clock "
+                      "jumped ahead or the machine cannot step at step_rate (real-time factor "
+                      "%.2f).",
+                      plan.behind, plan.behind * sim_->scene().step_rate, plan.steps, plan.skipped,
+                      real_time_factor_.value());
+  }
+  // The steps due, within one step period of wall time: what is left over is still due at the
+  // next call, and in between services and the reconfigure get their turn.
   const double period = 1.0 / sim_->scene().step_rate;
-  pollTfFrames();
-  driveBodies(ros::WallTime::now().toSec() + period);
+  const ros::WallTime start = ros::WallTime::now();
+  for (int k = 0; k < plan.steps; ++k) {
+    if (k > 0 && (ros::WallTime::now() - start).toSec() > period) break;
+    stepOnce();
+  }
+}
+
+void ClothRos::clockLoop() {
+  using Clock = std::chrono::steady_clock;
+  // Pacing for max_real_time_factor: the wall time each state is due at, counted from an anchor.
+  // After a stall (a long service call) the anchor moves, so the node does not race to make up.
+  Clock::time_point anchor_wall = Clock::now();
+  double anchor_time = 0.0;
+  while (clock_running_ && ros::ok()) {
+    double state_time = 0.0;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stepOnce();
+      const ros::Time now = stateTime();
+      state_time = now.toSec();
+      rosgraph_msgs::Clock clock;
+      clock.clock = now;
+      clock_pub_.publish(clock);
+    }
+    if (config_.max_real_time_factor <= 0.0) {
+      // Lets a service or reconfigure waiting for the mutex in.
+      std::this_thread::yield();
+      continue;
+    }
+    const Clock::time_point due =
+        anchor_wall + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(
+                          (state_time - anchor_time) / config_.max_real_time_factor));
+    const Clock::time_point now = Clock::now();
+    if (due > now) {
+      std::this_thread::sleep_until(due);
+    } else if (now - due > std::chrono::milliseconds(100)) {
+      anchor_wall = now;
+      anchor_time = state_time;
+    }
+  }
+}
+
+void ClothRos::stepOnce() {
+  const double period = 1.0 / sim_->scene().step_rate;
+  pollTfFrames(inputTime());
+  driveBodies(step_clock_.stateTime(sim_->time() + period).toSec());
   sim_->step();
   real_time_factor_.add(ros::WallTime::now().toSec(), sim_->time());
   diagnostics_->addStep(sim_->stats().step_wall_time);
@@ -232,6 +337,9 @@ void ClothRos::stepCallback(const ros::WallTimerEvent& /*event*/) {
                       "runs slower than real time (factor %.2f). Lower step_rate, "
                       "solver.substeps or the cloth size.",
                       1e3 * sim_->stats().step_wall_time, 1e3 * period, real_time_factor_.value());
+  }
+  if (publish_ticks_.due(sim_->time())) {
+    publishOutputs();
   }
 }
 
@@ -248,8 +356,7 @@ void ClothRos::warnAboutDegenerateConstraints() {
                     stats.degenerate_constraints, stats.first_degenerate_constraint, con.i, con.j);
 }
 
-void ClothRos::publishCallback(const ros::WallTimerEvent& /*event*/) {
-  std::lock_guard<std::mutex> lock(mutex_);
+void ClothRos::publishOutputs() {
   if (!allFinite(sim_->particles())) {
     // Publishing would hand NaNs to every consumer; the diagnostics report the error too.
     ROS_ERROR_THROTTLE(5.0,
@@ -286,7 +393,18 @@ void ClothRos::diagnosticsCallback(const ros::WallTimerEvent& /*event*/) {
 bool ClothRos::resetCallback(std_srvs::Trigger::Request& /*request*/,
                              std_srvs::Trigger::Response& response) {
   std::lock_guard<std::mutex> lock(mutex_);
+  // As the clock, the node keeps its time going forward (whoever follows /clock would see it jump
+  // back); otherwise simulated time 0 is now.
+  resetSimulation(config_.publish_clock ? stateTime() : ros::Time::now());
+  response.success = true;
+  response.message = "back to the initial state";
+  return true;
+}
+
+void ClothRos::resetSimulation(const ros::Time& origin) {
   sim_->reset();
+  step_clock_.restart(origin);
+  publish_ticks_.restart();
   // Grippers and obstacles are back at their scene poses: the next pose (or tf stamp) starts
   // afresh from there, and a replayed stream with earlier stamps is not out of order.
   for (Body& body : bodies_) {
@@ -296,9 +414,6 @@ bool ClothRos::resetCallback(std_srvs::Trigger::Request& /*request*/,
   real_time_factor_.clear();  // simulated time jumps back: old samples would give a negative rate
   // Publish the initial state at once, so a client sees it before the next step moves it.
   publishState();
-  response.success = true;
-  response.message = "back to the initial state";
-  return true;
 }
 
 bool ClothRos::graspCallback(const Body& body, std_srvs::SetBool::Request& request,
@@ -358,7 +473,7 @@ void ClothRos::publishState() {
   // A fresh message each time: a nodelet subscriber may still hold the previous one.
   const ClothStatePtr msg = boost::make_shared<ClothState>();
   msg->header.frame_id = sim_->scene().frame_id;
-  msg->header.stamp = ros::Time::now();
+  msg->header.stamp = stateTime();
   RosConversions::toStateMessage(*sim_, *msg);
   msg->stats.real_time_factor = real_time_factor_.value();
   msg->stats.rejected_inputs = rejections_.total();
@@ -372,7 +487,7 @@ void ClothRos::publishMarkers() {
   }
   std_msgs::Header header;
   header.frame_id = sim_->scene().frame_id;
-  header.stamp = ros::Time::now();
+  header.stamp = stateTime();
   const auto msg = boost::make_shared<visualization_msgs::MarkerArray>();
   RosConversions::toMarkerArray(*sim_, header, *msg);
   markers_pub_.publish(msg);
@@ -385,7 +500,7 @@ void ClothRos::publishWrenches() {
     }
     const auto msg = boost::make_shared<geometry_msgs::WrenchStamped>();
     msg->header.frame_id = sim_->scene().frame_id;
-    msg->header.stamp = ros::Time::now();
+    msg->header.stamp = stateTime();
     // The force the grasped particles' constraints pull on the gripper, in the scene frame. The
     // core reports no torque, so it stays zero.
     msg->wrench.force = RosConversions::toVector3(sim_->gripperForce(body.index));
