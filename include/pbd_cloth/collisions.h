@@ -2,6 +2,8 @@
 // constraints C >= 0 (never as a post-pass): the bounds box (seed 000, C1), obstacles (plane,
 // sphere, box, capsule; static or moving) with friction, particle-particle contact, and cloth
 // self-collision with thickness (vertex-triangle per the seed, plus edge-edge; self_collision.h).
+// Colliders are the scene's obstacles and the robot's link collision elements alike: one shape
+// interface (shapes.h), each with its own pose, padding and friction.
 // Position-level friction (seed eq. friction_correction) acts on all three kinds (contact.h).
 //
 // The step, as the solver drives it:
@@ -59,10 +61,19 @@ class Collisions {
   // Reads bounds, friction, thickness, self_collision, gravity (for the motion bound) and
   // obstacles.
   void configure(const SceneConfig& scene);
-  void setFriction(const FrictionConfig& friction) { friction_ = friction; }
-  // An obstacle moves from its current pose to `target` over the next step (a kinematic body).
-  // A non-finite target is refused (returns false) and the obstacle keeps its course.
+  // One more collider after the scene's obstacles (a robot link's collision element, its pose in
+  // the scene frame); returns its index. Call before prepare().
+  int addCollider(const ObstacleConfig& collider);
+  // cloth.friction: every collider without a friction of its own.
+  void setFriction(const FrictionConfig& friction);
+  // A collider moves from its current pose to `target` over the next step (a kinematic body).
+  // A non-finite target is refused (returns false) and the collider keeps its course.
   bool setObstacleTarget(int obstacle, const Pose& target);
+  // A disabled collider touches nothing. Enabled again, it is placed at its next target without
+  // sweeping the way in between (it was not followed while away).
+  void setObstacleEnabled(int obstacle, bool enabled);
+  bool obstacleEnabled(int obstacle) const { return enabled_[obstacle] != 0; }
+  // Every collider: the scene's obstacles first, then those added.
   const std::vector<ObstacleConfig>& obstacles() const { return obstacles_; }
   // Sizes every buffer (called once the particles exist) and finds the contacts of the initial
   // state, so maxPenetration() is right before the first step.
@@ -108,12 +119,20 @@ class Collisions {
   std::vector<ObstacleConfig> obstacles_;
   std::vector<Pose> obstacle_targets_;
   std::vector<Shape> shapes_;
+  std::vector<FrictionConfig> obstacle_friction_;
+  std::vector<char> enabled_;
+  std::vector<char> teleport_;  // enabled again: jump to the next target
   std::vector<Frame> frame_begin_;
   std::vector<Frame> frame_end_;
   Vec3Array obstacle_lo_;  // world bounds of each obstacle over the substep (begin and end poses)
   Vec3Array obstacle_hi_;
   std::vector<ContactState> obstacle_contacts_;  // [particle * obstacles + obstacle]
   std::vector<double> obstacle_allowance_;       // same layout: allowanceFor, this step
+  std::vector<int> mesh_hint_;  // same layout: last closest triangle (mesh shapes' search hint)
+  // Same layout, mesh shapes: the last distance computed and where (local frame), a free lower
+  // bound on the next one.
+  std::vector<double> mesh_distance_;
+  Vec3Array mesh_point_;
 
   // Step and substep.
   double dt_ = 0.0;

@@ -33,7 +33,12 @@ void loadObstacleMeshes(SceneConfig& scene);
 void loadRobot(SceneConfig& scene, const std::string& urdf_xml, const std::string& source);
 
 // loadRobot with the text of scene.robot.urdf_file (ConfigError "robot.urdf_file" when it cannot
-// be read).
+// be read). Relative mesh paths inside the URDF are relative to the URDF file's directory (with
+// loadRobot: to the current directory); package:// and file:// URIs are the usual form.
 void loadRobotFile(SceneConfig& scene);
+
+// `location` with a relative path resolved against `base_directory` ("" = the current directory:
+// unchanged). Absolute paths and file:// / package:// URIs are returned unchanged.
+std::string resolveScenePath(const std::string& location, const std::string& base_directory);
 
 }  // namespace pbd_cloth

@@ -191,7 +191,9 @@ struct RobotConfig {
   FrictionConfig friction;                     // robot.friction
   std::vector<JointWaypoint> joint_trajectory;  // robot.joint_trajectory
   Pose pose;  // robot.pose: the root link in frame_id when posed by joint_trajectory (FK)
-  RobotModel model;  // the parsed URDF (scene_assets.h); links not selected by `links` are removed
+  // The parsed URDF (scene_assets.h); links not selected by `links` stay in the tree without
+  // collisions.
+  RobotModel model;
 };
 
 struct BoundsConfig {

@@ -21,12 +21,24 @@ namespace pbd_cloth {
 //   the default box.
 // - Integers may be written as 10.0. Poses are [x, y, z, qx, qy, qz, qw]; the quaternion is
 //   normalized, a zero one is refused. Waypoint `grasp` absent reads as -1 (no change).
-// - Obstacle keys of another shape (a radius on a box) are refused; `shape` is required.
-SceneConfig sceneFromYaml(const YAML::Node& root);
+// - Obstacle keys of another shape (a radius on a box) are refused; `shape` is required. A mesh
+//   obstacle requires `mesh`; its `scale` is [sx, sy, sz] or one number for all axes.
+// - Files: after parsing, every mesh obstacle's file and, when robot.urdf_file is set, the URDF
+//   (with its link meshes) are loaded (scene_assets.h), then the whole scene is validated. A
+//   relative path (obstacles[i].mesh, robot.urdf_file) is relative to `base_directory` ("" = the
+//   current directory; loadScene passes the YAML file's directory) and is stored resolved. file://
+//   and package:// URIs go through resource_retriever (package:// needs the package on
+//   ROS_PACKAGE_PATH, as a sourced workspace has it). Relative mesh paths inside a URDF file are
+//   relative to that file. What loads but deserves a warning (an open mesh, a selected link
+//   without collision elements) is listed in SceneConfig::load_warnings.
+SceneConfig sceneFromYaml(const YAML::Node& root, const std::string& base_directory = "");
 
-// Loads a file and parses it as above. Throws ConfigError (key "file") when it cannot be read.
+// Loads a file and parses it as above, relative paths relative to the file's directory. Throws
+// ConfigError (key "file") when it cannot be read.
 SceneConfig loadScene(const std::string& path);
 YAML::Node loadSceneYaml(const std::string& path);
+// The base directory of the scene file `path` for sceneFromYaml ("" for a bare file name).
+std::string sceneFileDirectory(const std::string& path);
 
 // Applies one "dotted.key=value" override (cloth_bench --set), e.g. "solver.substeps=20",
 // "cloth.pinned=[0, 49]", "grippers.0.radius=0.03". The value is parsed as YAML. Missing map keys

@@ -1,13 +1,18 @@
-// Geometry of the obstacles: the signed distance of a point to a plane, sphere, box or capsule in
-// the shape's own frame, and a swept-sphere query for continuous collision handling. Plain structs
-// and a switch on the shape type: no virtual calls in the contact loop.
+// Geometry of the obstacles and robot links: the one shape interface. The signed distance of a
+// point to a plane, sphere, box, capsule, cylinder or closed triangle mesh in the shape's own
+// frame, and a swept-sphere query for continuous collision handling, which works for every shape
+// because every distance here is exact (1-Lipschitz). Plain structs and a switch on the shape type:
+// no virtual calls in the contact loop.
 #pragma once
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include <memory>
+
 #include "pbd_cloth/particles.h"
 #include "pbd_cloth/scene_config.h"
+#include "pbd_cloth/triangle_mesh.h"
 
 namespace pbd_cloth {
 
@@ -15,6 +20,8 @@ namespace pbd_cloth {
 // (0,0,-half_length) to (0,0,half_length) inflated by radius (local z axis, like rviz's cylinder).
 // Box: centred at the origin with these half edge lengths. Plane: normal.x = offset with a unit
 // normal; the free side is normal.x - offset >= 0 (the seed's C(p) = n^T p - d_rest >= 0).
+// Cylinder: radius about the local z axis, flat ends at z = +-half_length (URDF's cylinder). Mesh:
+// the triangle mesh in its own (already scaled) coordinates. Every shape is grown by `padding`.
 struct Shape {
   ShapeType type = ShapeType::kSphere;
   double radius = 0.0;
@@ -22,6 +29,8 @@ struct Shape {
   Vec3 half_extents = Vec3::Zero();
   Vec3 normal = Vec3::UnitZ();
   double offset = 0.0;
+  std::shared_ptr<const TriangleMesh> mesh;
+  double padding = 0.0;
 };
 
 // Builds the local shape of an obstacle. The plane's normal is normalised together with its offset
@@ -46,8 +55,11 @@ void worldBounds(const Shape& shape, const Frame& frame, Vec3& lo, Vec3& hi);
 
 // Signed distance of the local point x to the surface (negative inside) and the outward unit
 // normal of the nearest surface point (inside: the direction of the shortest way out). The distance
-// is exact for all four shapes, hence 1-Lipschitz, which sweepSphere relies on.
-double signedDistance(const Shape& shape, const Vec3& x, Vec3& normal);
+// is exact for every shape (the mesh's by closest-triangle search), hence 1-Lipschitz, which
+// sweepSphere relies on; padding subtracts a constant and keeps that.
+// `hint`: the mesh's search hint (TriangleMesh::signedDistance), kept per particle by the caller;
+// other shapes ignore it.
+double signedDistance(const Shape& shape, const Vec3& x, Vec3& normal, int* hint = nullptr);
 double signedDistance(const Shape& shape, const Vec3& x);
 
 // Continuous collision: the first fraction t in [0, 1] at which a sphere of radius r moving along
@@ -58,6 +70,6 @@ double signedDistance(const Shape& shape, const Vec3& x);
 // `start_distance` and `start_normal` are signedDistance at a (the caller has them already); on a
 // hit, `normal` is the outward normal at the entry point.
 bool sweepSphere(const Shape& shape, const Vec3& a, const Vec3& b, double r, double start_distance,
-                 const Vec3& start_normal, double& t, Vec3& normal);
+                 const Vec3& start_normal, double& t, Vec3& normal, int* hint = nullptr);
 
 }  // namespace pbd_cloth

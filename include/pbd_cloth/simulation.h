@@ -58,7 +58,7 @@ class Simulation {
 
   // Obstacles. Index -1 means "no such obstacle".
   int obstacleIndex(const std::string& name) const;
-  int obstacleCount() const { return static_cast<int>(collisions_.obstacles().size()); }
+  int obstacleCount() const { return static_cast<int>(scene_.obstacles.size()); }
   // The obstacle as it stands now (pose at the end of the last step).
   const ObstacleConfig& obstacle(int obstacle) const { return collisions_.obstacles()[obstacle]; }
   // The pose the obstacle reaches at the end of the next step (moved as a kinematic body).
@@ -103,7 +103,20 @@ class Simulation {
     std::size_t next_waypoint = 0;  // first waypoint whose grasp event is pending
   };
 
+  // A robot link: its colliders [first_collider, first_collider + collider_count) in collisions_.
+  struct RobotLinkState {
+    int first_collider = 0;
+    int collider_count = 0;
+    Pose pose;          // at the end of the last step
+    Pose target;        // at the end of the next step
+    bool live = false;  // a pose was given: robot.joint_trajectory no longer poses it
+    bool enabled = true;
+  };
+
   void build();
+  void buildRobot();
+  void followJointTrajectory(double t);
+  void moveRobotColliders();
   void followTrajectories(double t_end);
   void updateKinematicTargets(double dt);
   void releaseGrasp(GripperState& gripper);
@@ -116,6 +129,12 @@ class Simulation {
   Solver solver_;
   Collisions collisions_;
   std::vector<GripperState> grippers_;
+  std::vector<RobotLinkState> links_;  // one per scene_.robot.model.links
+  // robot.joint_trajectory with every joint's position at every waypoint (a joint a waypoint does
+  // not name keeps its previous value; 0 before the first), and scratch space for the step.
+  std::vector<std::vector<double>> joint_waypoints_;
+  std::vector<double> joint_positions_;
+  std::vector<Pose> link_poses_;
   double time_ = 0.0;
 };
 

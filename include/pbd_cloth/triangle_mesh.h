@@ -1,6 +1,7 @@
 // A closed triangle mesh as a collision shape: exact signed distance by closest-triangle queries
-// over an axis-aligned bounding-box tree (no grid, no convex hull), so non-convex cavities and holes
-// are kept exactly: a particle inside a mug stays inside, a rope hangs through a torus's hole.
+// over an axis-aligned bounding-box tree (no grid, no convex hull), so non-convex cavities and
+// holes are kept exactly: a particle inside a mug stays inside, a rope hangs through a torus's
+// hole.
 //
 // Sign: the angle-weighted pseudo-normal of the closest feature (face, edge or vertex; Baerentzen
 // and Aanaes 2005, "Signed distance computation using the angle weighted pseudonormal"): for a
@@ -18,6 +19,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 namespace pbd_cloth {
 
@@ -33,7 +35,11 @@ class TriangleMesh {
 
   // Signed distance of x (mesh frame) to the surface, negative inside (closed meshes only), and
   // the outward unit normal of the shortest way to the surface.
-  double signedDistance(const Vec3& x, Vec3& normal) const;
+  // `hint` (optional, in and out): a triangle likely to be near x, e.g. the closest one of the same
+  // particle's last query. Its distance bounds the search from the start, so the tree walk prunes
+  // almost everything for a point that moved little (temporal coherence). Any value is safe: an
+  // out-of-range hint is ignored; on return it holds the closest triangle.
+  double signedDistance(const Vec3& x, Vec3& normal, int* hint = nullptr) const;
 
   bool closed() const { return boundary_edges_ == 0; }
   int boundaryEdges() const { return boundary_edges_; }
@@ -50,9 +56,9 @@ class TriangleMesh {
  private:
   struct Node {
     Vec3 lo, hi;
-    int first = 0;  // leaf: first triangle in order_; inner: index of the left child
-    int count = 0;  // leaf: triangle count; inner: 0 (right child = first + 1 ... see .cpp)
-    int right = -1;
+    int first = 0;   // leaf: first triangle in order_; inner: index of the left child
+    int count = 0;   // leaf: triangle count; inner: 0
+    int right = -1;  // inner: index of the right child
   };
   int build(int begin, int end, std::vector<Vec3>& centroids);
 
@@ -60,7 +66,7 @@ class TriangleMesh {
   std::vector<Triangle> triangles_;
   std::vector<Vec3> face_normals_;
   std::vector<std::array<Vec3, 3>> edge_normals_;  // per triangle, edge k = (v_k, v_{k+1})
-  std::vector<Vec3> vertex_normals_;                // angle-weighted
+  std::vector<Vec3> vertex_normals_;               // angle-weighted
   std::vector<Node> nodes_;
   std::vector<int> order_;  // triangles in leaf order
   Vec3 lo_ = Vec3::Zero(), hi_ = Vec3::Zero();

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <climits>
 #include <cmath>
+#include <limits>
 
 namespace pbd_cloth {
 
@@ -25,18 +26,42 @@ void Collisions::configure(const SceneConfig& scene) {
   thickness_ = scene.cloth.thickness;
   self_collision_ = scene.cloth.self_collision;
   gravity_ = scene.solver.gravity;
-  obstacles_ = scene.obstacles;
+  obstacles_.clear();
   obstacle_targets_.clear();
   shapes_.clear();
+  obstacle_friction_.clear();
+  enabled_.clear();
+  teleport_.clear();
   frame_begin_.clear();
-  for (const auto& obstacle : obstacles_) {
-    obstacle_targets_.push_back(obstacle.pose);
-    shapes_.push_back(makeShape(obstacle));
-    frame_begin_.push_back(frameFromPose(obstacle.pose));
+  frame_end_.clear();
+  obstacle_lo_.clear();
+  obstacle_hi_.clear();
+  for (const auto& obstacle : scene.obstacles) addCollider(obstacle);
+}
+
+int Collisions::addCollider(const ObstacleConfig& collider) {
+  if (collider.shape == ShapeType::kMesh && !collider.mesh_data) {
+    throw ConfigError(collider.name + ".mesh",
+                      "the mesh '" + collider.mesh + "' is not loaded (scene_assets.h loadMesh)");
   }
-  frame_end_ = frame_begin_;
-  obstacle_lo_.assign(obstacles_.size(), Vec3::Zero());
-  obstacle_hi_.assign(obstacles_.size(), Vec3::Zero());
+  obstacles_.push_back(collider);
+  obstacle_targets_.push_back(collider.pose);
+  shapes_.push_back(makeShape(collider));
+  obstacle_friction_.push_back(collider.has_friction ? collider.friction : friction_);
+  enabled_.push_back(1);
+  teleport_.push_back(0);
+  frame_begin_.push_back(frameFromPose(collider.pose));
+  frame_end_.push_back(frame_begin_.back());
+  obstacle_lo_.push_back(Vec3::Zero());
+  obstacle_hi_.push_back(Vec3::Zero());
+  return static_cast<int>(obstacles_.size()) - 1;
+}
+
+void Collisions::setFriction(const FrictionConfig& friction) {
+  friction_ = friction;
+  for (std::size_t k = 0; k < obstacles_.size(); ++k) {
+    if (!obstacles_[k].has_friction) obstacle_friction_[k] = friction;
+  }
 }
 
 bool Collisions::setObstacleTarget(int obstacle, const Pose& target) {
@@ -46,13 +71,25 @@ bool Collisions::setObstacleTarget(int obstacle, const Pose& target) {
   }
   obstacle_targets_[obstacle].position = target.position;
   obstacle_targets_[obstacle].orientation = target.orientation.normalized();
+  if (teleport_[obstacle]) {
+    obstacles_[obstacle].pose = obstacle_targets_[obstacle];
+    teleport_[obstacle] = 0;
+  }
   return true;
+}
+
+void Collisions::setObstacleEnabled(int obstacle, bool enabled) {
+  if (enabled && !enabled_[obstacle]) teleport_[obstacle] = 1;
+  enabled_[obstacle] = enabled ? 1 : 0;
 }
 
 void Collisions::prepare(const Particles& particles, const ClothTopology& topology) {
   const int n = particles.size();
   obstacle_contacts_.assign(static_cast<std::size_t>(n) * obstacles_.size(), ContactState());
   obstacle_allowance_.assign(obstacle_contacts_.size(), 0.0);
+  mesh_hint_.assign(obstacle_contacts_.size(), -1);
+  mesh_distance_.assign(obstacle_contacts_.size(), -std::numeric_limits<double>::infinity());
+  mesh_point_.assign(obstacle_contacts_.size(), Vec3::Zero());
   box_lo_.assign(n, Vec3::Zero());
   box_hi_.assign(n, Vec3::Zero());
   particle_contacts_.reserve(particles);
@@ -210,6 +247,7 @@ void Collisions::preStabilizeObstacles(Particles& p, double max_shift) {
   for (int i = 0; i < p.size(); ++i) {
     if (p.inverse_mass[i] == 0.0) continue;
     for (std::size_t k = 0; k < count; ++k) {
+      if (!enabled_[k]) continue;
       Vec3 normal;
       const double clearance =
           signedDistance(shapes_[k], frame_end_[k].toLocal(p.position[i]), normal) - p.radius[i];
@@ -238,6 +276,7 @@ double Collisions::projectObstacles(Particles& p) {
     Vec3& x = p.position[i];
     const double r = p.radius[i];
     for (std::size_t k = 0; k < count; ++k) {
+      if (!enabled_[k]) continue;
       const std::size_t slot = static_cast<std::size_t>(i) * count + k;
       ContactState& state = obstacle_contacts_[slot];
       const bool pushed = state.substep == substep_ && state.depth > 0.0;
@@ -252,14 +291,27 @@ double Collisions::projectObstacles(Particles& p) {
       const Frame& begin = frame_begin_[k];
       const Frame& end = frame_end_[k];
       const Vec3 b = end.toLocal(x);  // where the particle is, relative to the shape now
-      Vec3 normal_b;
-      const double clearance = signedDistance(shape, b, normal_b) - r;
       const Vec3 a = begin.toLocal(p.substep_start[i]);  // ... and where it was
+      const bool mesh = shape.type == ShapeType::kMesh;
+      if (mesh && !pushed) {
+        // A mesh query costs a tree search; the last one bounds this one for free. The distance
+        // is 1-Lipschitz, so d(b) >= d(b_last) - |b - b_last| (local frame): when even that
+        // bound clears the segment, the test below would skip it too.
+        const double lower = mesh_distance_[slot] - (b - mesh_point_[slot]).norm() - r;
+        if (lower >= (b - a).norm()) continue;
+      }
+      Vec3 normal_b;
+      int* hint = &mesh_hint_[slot];
+      const double clearance = signedDistance(shape, b, normal_b, hint) - r;
+      if (mesh) {
+        mesh_distance_[slot] = clearance + r;
+        mesh_point_[slot] = b;
+      }
       // The distance is 1-Lipschitz: a segment whose end is farther from the surface than its
       // length never touched the shape (unless it was pushed out earlier in this substep).
       if (clearance >= (b - a).norm() && !pushed) continue;
       Vec3 normal_a;
-      const double start_distance = signedDistance(shape, a, normal_a);
+      const double start_distance = signedDistance(shape, a, normal_a, hint);
       // The window's base is the particle's place on the shape when it began: carried by the
       // shape, it is the point under the particle that friction holds it to.
       if (state.beginSubstep(substep_, step_, start_distance < (1.0 + kTouchGap) * r)) {
@@ -272,7 +324,7 @@ double Collisions::projectObstacles(Particles& p) {
       Vec3 normal_entry;
       if (allowance > 0.0) {
         c = clearance + allowance;  // started inside: only not deeper
-      } else if (sweepSphere(shape, a, b, r, start_distance, normal_a, t, normal_entry)) {
+      } else if (sweepSphere(shape, a, b, r, start_distance, normal_a, t, normal_entry, hint)) {
         if (!(clearance < 0.0 && normal_b.dot(normal_entry) > 0.0)) {
           // Crossed or cut through: back onto the tangent plane where the sphere entered.
           c = (b - (a + t * (b - a))).dot(normal_entry);
@@ -289,7 +341,7 @@ double Collisions::projectObstacles(Particles& p) {
       if (state.frictionDepth() > 0.0) {
         // The shape carries the point under the particle along with it: the relative
         // displacement is measured from there, so a moving shape drags what rests on it.
-        x += frictionCorrection(x - end.toWorld(state.base), state, friction_);
+        x += frictionCorrection(x - end.toWorld(state.base), state, obstacle_friction_[k]);
       }
     }
   }
@@ -325,6 +377,7 @@ double Collisions::maxPenetration(const Particles& particles, const ClothTopolog
     }
   }
   for (std::size_t k = 0; k < shapes_.size(); ++k) {
+    if (!enabled_[k]) continue;
     const Frame frame = frameFromPose(obstacles_[k].pose);
     for (int i = 0; i < particles.size(); ++i) {
       if (particles.inverse_mass[i] == 0.0) continue;  // prescribed: not the solver's to fix

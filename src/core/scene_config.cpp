@@ -47,6 +47,10 @@ const char* toString(ShapeType shape) {
       return "capsule";
     case ShapeType::kPlane:
       return "plane";
+    case ShapeType::kCylinder:
+      return "cylinder";
+    case ShapeType::kMesh:
+      return "mesh";
   }
   return "unknown";
 }
@@ -172,6 +176,13 @@ void checkParticleIndex(const std::string& key, int index, std::int64_t cloth_co
   }
 }
 
+void checkFriction(const std::string& key, const FrictionConfig& friction) {
+  const double mu_s = friction.static_coefficient;
+  checkNumber(key + ".static", mu_s, kNonNegative);
+  // Kinetic friction above static would let a sliding contact stop and then be unable to start.
+  checkNumber(key + ".kinetic", friction.kinetic_coefficient, Range{0.0, mu_s, false, false});
+}
+
 void validateSolver(const SolverConfig& s) {
   checkInteger("solver.substeps", s.substeps, 1, kMaxPasses);
   checkInteger("solver.iterations", s.iterations, 1, kMaxPasses);
@@ -203,11 +214,7 @@ void validateCloth(const ClothConfig& c) {
   checkNumber("cloth.stretch_compliance", c.stretch_compliance, kNonNegative);
   checkFinite("cloth.bend_compliance", c.bend_compliance);
   checkNumber("cloth.thickness", c.thickness, kPositive);
-  const double mu_s = c.friction.static_coefficient;
-  checkNumber("cloth.friction.static", mu_s, kNonNegative);
-  // Kinetic friction above static would let a sliding contact stop and then be unable to start.
-  checkNumber("cloth.friction.kinetic", c.friction.kinetic_coefficient,
-              Range{0.0, mu_s, false, false});
+  checkFriction("cloth.friction", c.friction);
   for (std::size_t k = 0; k < c.pinned.size(); ++k) {
     checkParticleIndex(indexed("cloth.pinned", k), c.pinned[k], count);
   }
@@ -251,10 +258,12 @@ void validateGripper(const std::string& key, const GripperConfig& g, std::set<st
   }
 }
 
-void validateObstacle(const std::string& key, const ObstacleConfig& o,
-                      std::set<std::string>& names) {
-  checkName(key + ".name", o.name, names);
+// The geometry of one shape: an obstacle (key "obstacles[i]") or a robot link's collision element
+// (key "robot link 'x' collision i").
+void validateShape(const std::string& key, const ObstacleConfig& o) {
   checkPose(key + ".pose", o.pose);
+  checkNumber(key + ".padding", o.padding, kNonNegative);
+  if (o.has_friction) checkFriction(key + ".friction", o.friction);
   switch (o.shape) {
     case ShapeType::kSphere:
       checkNumber(key + ".radius", o.radius, kPositive);
@@ -275,6 +284,94 @@ void validateObstacle(const std::string& key, const ObstacleConfig& o,
       if (o.normal.norm() == 0.0) throw ConfigError(key + ".normal", "must be non-zero");
       checkFinite(key + ".offset", o.offset);
       break;
+    case ShapeType::kCylinder:
+      checkNumber(key + ".radius", o.radius, kPositive);
+      checkNumber(key + ".length", o.length, kPositive);
+      break;
+    case ShapeType::kMesh:
+      if (o.mesh.empty()) {
+        throw ConfigError(key + ".mesh", "required: a mesh file path, file:// or package:// URI");
+      }
+      checkFinite(key + ".scale", o.scale);
+      if ((o.scale.array() == 0.0).any()) {
+        throw ConfigError(key + ".scale",
+                          "every factor must be non-zero, got " + formatVector(o.scale));
+      }
+      // The scene reader loads it (scene_assets.h loadObstacleMeshes); a scene built in code must
+      // load it too.
+      if (!o.mesh_data) {
+        throw ConfigError(key + ".mesh", "mesh '" + o.mesh + "' is not loaded");
+      }
+      break;
+  }
+}
+
+void validateObstacle(const std::string& key, const ObstacleConfig& o,
+                      std::set<std::string>& names) {
+  checkName(key + ".name", o.name, names);
+  checkFrame(key + ".tf_frame", o.tf_frame, true);
+  validateShape(key, o);
+}
+
+std::string jointNames(const RobotModel& model) {
+  std::string out;
+  for (const RobotJoint& joint : model.joints) {
+    if (joint.type == JointType::kFixed || joint.mimic_joint >= 0) continue;
+    out += (out.empty() ? "" : ", ") + joint.name;
+  }
+  return out.empty() ? "none that move" : out;
+}
+
+void validateRobot(const RobotConfig& r) {
+  if (r.description.empty() && r.urdf_file.empty()) {
+    throw ConfigError("robot.description",
+                      "must name the URDF parameter (default robot_description) when "
+                      "robot.urdf_file is empty");
+  }
+  for (std::size_t k = 0; k < r.links.size(); ++k) {
+    if (r.links[k].empty()) throw ConfigError(indexed("robot.links", k), "must be a link name");
+  }
+  checkNumber("robot.padding", r.padding, kNonNegative);
+  checkFriction("robot.friction", r.friction);
+  checkPose("robot.pose", r.pose);
+  const RobotModel& model = r.model;
+  const bool loaded = !model.links.empty();
+  double previous_t = 0.0;
+  for (std::size_t k = 0; k < r.joint_trajectory.size(); ++k) {
+    const JointWaypoint& w = r.joint_trajectory[k];
+    const std::string wkey = indexed("robot.joint_trajectory", k);
+    if (!std::isfinite(w.t) || w.t < previous_t) {
+      throw ConfigError(wkey + ".t", "must be a finite time >= 0 and >= the previous waypoint's (" +
+                                         formatNumber(previous_t) + " s), got " +
+                                         formatNumber(w.t));
+    }
+    previous_t = w.t;
+    for (const auto& position : w.positions) {
+      const std::string pkey = wkey + ".positions." + position.first;
+      checkFinite(pkey, position.second);
+      if (!loaded) continue;  // the node checks again once robot_description is read
+      const int j = model.jointIndex(position.first);
+      if (j < 0) {
+        throw ConfigError(pkey, "no joint '" + position.first +
+                                    "' in the URDF (joints: " + jointNames(model) + ")");
+      }
+      if (model.joints[j].type == JointType::kFixed) {
+        throw ConfigError(pkey, "joint '" + position.first +
+                                    "' is fixed (joints that move: " + jointNames(model) + ")");
+      }
+      if (model.joints[j].mimic_joint >= 0) {
+        throw ConfigError(pkey, "joint '" + position.first + "' mimics joint '" +
+                                    model.joints[model.joints[j].mimic_joint].name +
+                                    "': set that one (joints that move: " + jointNames(model) +
+                                    ")");
+      }
+    }
+  }
+  for (const RobotLink& link : model.links) {
+    for (std::size_t c = 0; c < link.collisions.size(); ++c) {
+      validateShape("robot link '" + link.name + "' collision " + std::to_string(c),
+                    link.collisions[c]);
+    }
   }
 }
 
@@ -295,6 +392,7 @@ void validate(const SceneConfig& scene) {
   for (std::size_t k = 0; k < scene.obstacles.size(); ++k) {
     validateObstacle(indexed("obstacles", k), scene.obstacles[k], names);
   }
+  validateRobot(scene.robot);
   if (scene.bounds.enabled) {
     checkFinite("bounds.min", scene.bounds.min);
     checkFinite("bounds.max", scene.bounds.max);

@@ -25,6 +25,8 @@ Shape makeShape(const ObstacleConfig& obstacle) {
   const double norm = obstacle.normal.norm();
   shape.normal = norm > 0.0 ? Vec3(obstacle.normal / norm) : Vec3::UnitZ();
   shape.offset = norm > 0.0 ? obstacle.offset / norm : obstacle.offset;
+  shape.mesh = obstacle.mesh_data;
+  shape.padding = obstacle.padding;
   return shape;
 }
 
@@ -59,12 +61,51 @@ void worldBounds(const Shape& shape, const Frame& frame, Vec3& lo, Vec3& hi) {
     case ShapeType::kBox:
       extent = frame.rotation.cwiseAbs() * shape.half_extents;
       break;
+    case ShapeType::kCylinder:
+      extent = frame.rotation.cwiseAbs() * Vec3(shape.radius, shape.radius, shape.half_length);
+      break;
+    case ShapeType::kMesh: {
+      // The local box of the mesh, rotated: its centre moves, its half extents grow by |R|.
+      const Vec3 centre = 0.5 * (shape.mesh->boundsMax() + shape.mesh->boundsMin());
+      const Vec3 half = 0.5 * (shape.mesh->boundsMax() - shape.mesh->boundsMin());
+      const Vec3 middle = frame.toWorld(centre);
+      extent = frame.rotation.cwiseAbs() * half + Vec3::Constant(shape.padding);
+      lo = middle - extent;
+      hi = middle + extent;
+      return;
+    }
   }
+  extent.array() += shape.padding;
   lo = frame.translation - extent;
   hi = frame.translation + extent;
 }
 
-double signedDistance(const Shape& shape, const Vec3& x, Vec3& normal) {
+namespace {
+
+// Distance to a cylinder of radius r about z with flat ends at z = +-h: the 2D box distance in
+// (radial distance, |z|), exact inside and outside.
+double cylinderDistance(double r, double h, const Vec3& x, Vec3& normal) {
+  const double rho = std::hypot(x.x(), x.y());
+  const Vec3 radial = rho > 0.0 ? Vec3(x.x() / rho, x.y() / rho, 0.0) : Vec3::UnitX();
+  const Vec3 axial(0.0, 0.0, x.z() < 0.0 ? -1.0 : 1.0);
+  const double dr = rho - r;
+  const double dz = std::abs(x.z()) - h;
+  if (dr > 0.0 && dz > 0.0) {  // beyond the rim
+    const double distance = std::hypot(dr, dz);
+    normal = (dr * radial + dz * axial) / distance;
+    return distance;
+  }
+  if (dr > 0.0 || dz > 0.0 || dr > dz) {
+    // Outside the side or an end, or inside and nearer the side than an end.
+    const bool side = dr > dz;
+    normal = side ? radial : axial;
+    return side ? dr : dz;
+  }
+  normal = axial;
+  return dz;
+}
+
+double unpaddedDistance(const Shape& shape, const Vec3& x, Vec3& normal, int* hint) {
   switch (shape.type) {
     case ShapeType::kPlane:
       normal = shape.normal;
@@ -99,9 +140,19 @@ double signedDistance(const Shape& shape, const Vec3& x, Vec3& normal) {
       normal[axis] = sign[axis];
       return largest;
     }
+    case ShapeType::kCylinder:
+      return cylinderDistance(shape.radius, shape.half_length, x, normal);
+    case ShapeType::kMesh:
+      return shape.mesh->signedDistance(x, normal, hint);
   }
   normal = Vec3::UnitZ();
   return 0.0;
+}
+
+}  // namespace
+
+double signedDistance(const Shape& shape, const Vec3& x, Vec3& normal, int* hint) {
+  return unpaddedDistance(shape, x, normal, hint) - shape.padding;
 }
 
 double signedDistance(const Shape& shape, const Vec3& x) {
@@ -110,7 +161,7 @@ double signedDistance(const Shape& shape, const Vec3& x) {
 }
 
 bool sweepSphere(const Shape& shape, const Vec3& a, const Vec3& b, double r, double start_distance,
-                 const Vec3& start_normal, double& t, Vec3& normal) {
+                 const Vec3& start_normal, double& t, Vec3& normal, int* hint) {
   const Vec3 direction = b - a;
   const double length = direction.norm();
   const double tolerance = kSweepTolerance * r;
@@ -122,7 +173,7 @@ bool sweepSphere(const Shape& shape, const Vec3& a, const Vec3& b, double r, dou
     if (length == 0.0) return false;
     t += clearance / length;
     if (t > 1.0) return false;
-    clearance = signedDistance(shape, a + t * direction, normal) - r;
+    clearance = signedDistance(shape, a + t * direction, normal, hint) - r;
   }
   return false;
 }

@@ -34,6 +34,29 @@ Pose trajectoryPose(const std::vector<Waypoint>& trajectory, double t) {
 
 Simulation::Simulation(const SceneConfig& scene) : scene_(scene) {
   validate(scene_);
+  const RobotConfig& robot = scene_.robot;
+  if (robot.enabled && robot.model.links.empty()) {
+    throw ConfigError("robot",
+                      "no URDF loaded: give robot.urdf_file, or (node) the URDF in the parameter "
+                      "named by robot.description");
+  }
+  // Every waypoint as a full vector of joint positions, so the step only interpolates.
+  const std::size_t joint_count = robot.model.joints.size();
+  std::vector<double> previous(joint_count, 0.0);
+  for (std::size_t w = 0; w < robot.joint_trajectory.size(); ++w) {
+    for (const auto& entry : robot.joint_trajectory[w].positions) {
+      const int joint = robot.model.jointIndex(entry.first);
+      if (joint < 0) {
+        throw ConfigError(
+            "robot.joint_trajectory[" + std::to_string(w) + "].positions." + entry.first,
+            "no joint '" + entry.first + "' in the URDF");
+      }
+      previous[joint] = entry.second;
+    }
+    joint_waypoints_.push_back(previous);
+  }
+  joint_positions_.assign(joint_count, 0.0);
+  link_poses_.reserve(robot.model.links.size());
   build();
 }
 
@@ -41,6 +64,7 @@ void Simulation::build() {
   buildScene(scene_, particles_, topology_);
   initial_particles_ = particles_;
   collisions_.configure(scene_);
+  buildRobot();
   solver_.configure(scene_.solver, scene_.cloth);
   solver_.prepare(particles_, topology_);
   collisions_.prepare(particles_, topology_);
@@ -55,6 +79,99 @@ void Simulation::build() {
   computeStrain(particles_, topology_, solver_.mutableStats().max_strain,
                 solver_.mutableStats().mean_strain);
 }
+
+// The robot's collision elements become colliders after the obstacles, posed by forward kinematics
+// at the start of robot.joint_trajectory (all joints at 0 without one).
+void Simulation::buildRobot() {
+  const RobotModel& model = scene_.robot.model;
+  links_.assign(model.links.size(), RobotLinkState());
+  if (model.links.empty()) return;
+  followJointTrajectory(0.0);
+  for (std::size_t l = 0; l < model.links.size(); ++l) {
+    RobotLinkState& link = links_[l];
+    link.pose = link.target;
+    link.first_collider = static_cast<int>(collisions_.obstacles().size());
+    for (const ObstacleConfig& element : model.links[l].collisions) {
+      ObstacleConfig collider = element;
+      collider.pose = link.pose.compose(element.pose);
+      collisions_.addCollider(collider);
+      ++link.collider_count;
+    }
+  }
+}
+
+// Targets of the links that no live pose drives: forward kinematics of the joint trajectory at t.
+void Simulation::followJointTrajectory(double t) {
+  const RobotConfig& robot = scene_.robot;
+  if (links_.empty()) return;
+  const std::size_t count = joint_waypoints_.size();
+  if (count == 0) {
+    std::fill(joint_positions_.begin(), joint_positions_.end(), 0.0);
+  } else if (t <= robot.joint_trajectory.front().t) {
+    joint_positions_ = joint_waypoints_.front();
+  } else if (t >= robot.joint_trajectory.back().t) {
+    joint_positions_ = joint_waypoints_.back();
+  } else {
+    std::size_t k = 1;
+    while (robot.joint_trajectory[k].t < t) ++k;
+    const double t0 = robot.joint_trajectory[k - 1].t, t1 = robot.joint_trajectory[k].t;
+    const double s = t1 > t0 ? (t - t0) / (t1 - t0) : 1.0;
+    for (std::size_t j = 0; j < joint_positions_.size(); ++j) {
+      joint_positions_[j] = (1.0 - s) * joint_waypoints_[k - 1][j] + s * joint_waypoints_[k][j];
+    }
+  }
+  robot.model.linkPoses(robot.pose, joint_positions_, link_poses_);
+  for (std::size_t l = 0; l < links_.size(); ++l) {
+    if (!links_[l].live) links_[l].target = link_poses_[l];
+  }
+}
+
+// Every collision element follows its link: element pose = link pose composed with its origin.
+void Simulation::moveRobotColliders() {
+  const RobotModel& model = scene_.robot.model;
+  for (std::size_t l = 0; l < links_.size(); ++l) {
+    const RobotLinkState& link = links_[l];
+    for (int e = 0; e < link.collider_count; ++e) {
+      collisions_.setObstacleTarget(link.first_collider + e,
+                                    link.target.compose(model.links[l].collisions[e].pose));
+    }
+  }
+}
+
+int Simulation::robotLinkCount() const { return static_cast<int>(links_.size()); }
+
+int Simulation::robotLinkIndex(const std::string& name) const {
+  return scene_.robot.model.linkIndex(name);
+}
+
+const std::string& Simulation::robotLinkName(int link) const {
+  return scene_.robot.model.links[link].name;
+}
+
+bool Simulation::robotLinkHasCollision(int link) const { return links_[link].collider_count > 0; }
+
+void Simulation::setRobotLinkPose(int link, const Pose& pose) {
+  if (!pose.position.allFinite() || !pose.orientation.coeffs().allFinite() ||
+      pose.orientation.norm() == 0.0) {
+    return;
+  }
+  links_[link].live = true;
+  links_[link].target = pose;
+  links_[link].target.orientation.normalize();
+}
+
+const Pose& Simulation::robotLinkPose(int link) const { return links_[link].pose; }
+
+void Simulation::setRobotLinkEnabled(int link, bool enabled) {
+  RobotLinkState& state = links_[link];
+  if (enabled && !state.enabled) state.pose = state.target;  // no sweep from where it was lost
+  state.enabled = enabled;
+  for (int e = 0; e < state.collider_count; ++e) {
+    collisions_.setObstacleEnabled(state.first_collider + e, enabled);
+  }
+}
+
+bool Simulation::robotLinkEnabled(int link) const { return links_[link].enabled; }
 
 // Starts again from the scene as configured now: live-tuned settings (setSolverConfig, ...) are
 // kept, since they were written into scene_.
@@ -149,7 +266,7 @@ Eigen::Vector3d Simulation::gripperForce(int gripper) const {
 }
 
 int Simulation::obstacleIndex(const std::string& name) const {
-  const auto& obstacles = collisions_.obstacles();
+  const auto& obstacles = scene_.obstacles;
   for (std::size_t k = 0; k < obstacles.size(); ++k) {
     if (obstacles[k].name == name) return static_cast<int>(k);
   }
@@ -220,9 +337,12 @@ void Simulation::updateKinematicTargets(double dt) {
 
 void Simulation::step(double dt) {
   followTrajectories(time_ + dt);
+  followJointTrajectory(time_ + dt);
+  moveRobotColliders();
   updateKinematicTargets(dt);
   solver_.step(dt, particles_, topology_, collisions_);
   for (GripperState& state : grippers_) state.pose = state.target;
+  for (RobotLinkState& link : links_) link.pose = link.target;
   time_ += dt;
   StepStats& stats = solver_.mutableStats();
   computeStrain(particles_, topology_, stats.max_strain, stats.mean_strain);

@@ -210,6 +210,23 @@ void RosConversions::toObstacleMarkers(const Simulation& sim, const std_msgs::He
             Vec3::Constant(diameter));
         break;
       }
+      case ShapeType::kCylinder: {
+        const double diameter = 2.0 * shape.radius;
+        add(0, Marker::CYLINDER, Vec3::Zero(), identity,
+            Vec3(diameter, diameter, 2.0 * shape.half_length));
+        break;
+      }
+      case ShapeType::kMesh: {
+        // The collision mesh itself, as the solver sees it (after welding and scaling).
+        add(0, Marker::TRIANGLE_LIST, Vec3::Zero(), identity, Vec3::Ones());
+        Marker& marker = markers.markers.back();
+        const auto& vertices = shape.mesh->vertices();
+        marker.points.reserve(3 * shape.mesh->triangleCount());
+        for (const auto& triangle : shape.mesh->triangles()) {
+          for (int v : triangle) marker.points.push_back(toPoint(vertices[v]));
+        }
+        break;
+      }
       case ShapeType::kPlane: {
         // A square below the cloth's starting place, its top face on the plane.
         const Vec3 centre = obstacle.pose.orientation.conjugate() *

@@ -3,10 +3,13 @@
 // against its known keys before anything is read, and every conversion names the dotted key.
 #include "pbd_cloth/scene_yaml.h"
 
+#include "pbd_cloth/scene_assets.h"
+
 #include <algorithm>
 #include <cctype>
 #include <climits>
 #include <cmath>
+#include <filesystem>
 #include <set>
 #include <vector>
 
@@ -325,18 +328,33 @@ Names shapeKeys(ShapeType shape) {
       return {"radius", "length"};
     case ShapeType::kPlane:
       return {"normal", "offset"};
+    case ShapeType::kCylinder:
+      return {"radius", "length"};
+    case ShapeType::kMesh:
+      return {"mesh", "scale"};
   }
   return {};
 }
 
+// A mesh scale: [sx, sy, sz], or one number for all three axes.
+Eigen::Vector3d toScale(const YAML::Node& node, const std::string& key) {
+  if (node.IsScalar()) return Eigen::Vector3d::Constant(toDouble(node, key));
+  if (!node.IsSequence() || node.size() != 3) {
+    wrongType(node, key, "a list of 3 numbers [sx, sy, sz] or one number");
+  }
+  return toVector3(node, key);
+}
+
 ObstacleConfig readObstacle(const YAML::Node& node, const std::string& key) {
-  const Names common = {"name", "shape", "pose"};
+  const Names common = {"name", "shape", "pose", "tf_frame"};
   const MapReader map(node, key,
-                      {"name", "shape", "pose", "radius", "size", "length", "normal", "offset"});
+                      {"name", "shape", "pose", "tf_frame", "radius", "size", "length", "normal",
+                       "offset", "mesh", "scale"});
   if (!node || node.IsNull()) wrongType(node, key, "a map {name, shape, ...}");
   ObstacleConfig o;
   o.shape = toWord(map.require("shape"), map.keyOf("shape"),
-                   {ShapeType::kSphere, ShapeType::kBox, ShapeType::kCapsule, ShapeType::kPlane});
+                   {ShapeType::kSphere, ShapeType::kBox, ShapeType::kCapsule, ShapeType::kCylinder,
+                    ShapeType::kPlane, ShapeType::kMesh});
   Names allowed = common;
   for (const std::string& name : shapeKeys(o.shape)) allowed.push_back(name);
   for (const std::string& name : map.present()) {
@@ -352,7 +370,62 @@ ObstacleConfig readObstacle(const YAML::Node& node, const std::string& key) {
   map.read("length", o.length);
   map.read("normal", o.normal);
   map.read("offset", o.offset);
+  map.read("tf_frame", o.tf_frame);
+  if (o.shape == ShapeType::kMesh) {
+    o.mesh = toText(map.require("mesh"), map.keyOf("mesh"));
+    if (map.has("scale")) o.scale = toScale(map.get("scale"), map.keyOf("scale"));
+  }
   return o;
+}
+
+// A name in a list (a link name): a plain non-null string.
+std::string toName(const YAML::Node& node, const std::string& key) {
+  if (!node.IsScalar()) wrongType(node, key, "a name");
+  return node.Scalar();
+}
+
+JointWaypoint readJointWaypoint(const YAML::Node& node, const std::string& key) {
+  const MapReader map(node, key, {"t", "positions"});
+  if (!node || node.IsNull()) wrongType(node, key, "a map {t, positions: {joint: value, ...}}");
+  JointWaypoint w;
+  w.t = toDouble(map.require("t"), map.keyOf("t"));
+  const YAML::Node positions = map.require("positions");
+  const std::string positions_key = map.keyOf("positions");
+  if (positions.IsNull()) return w;
+  if (!positions.IsMap()) wrongType(positions, positions_key, "a map {joint_name: value, ...}");
+  std::set<std::string> seen;
+  for (const auto& entry : positions) {
+    if (!entry.first.IsScalar()) wrongType(entry.first, positions_key, "a map with joint names");
+    const std::string& joint = entry.first.Scalar();
+    const std::string joint_key = positions_key + "." + joint;
+    if (!seen.insert(joint).second) throw ConfigError(joint_key, "given twice");
+    w.positions.emplace_back(joint, toDouble(entry.second, joint_key));
+  }
+  return w;
+}
+
+void readRobot(const YAML::Node& node, RobotConfig& r) {
+  r.enabled = node && !node.IsNull();
+  const MapReader map(
+      node, "robot",
+      {"description", "urdf_file", "links", "padding", "friction", "pose", "joint_trajectory"});
+  map.read("description", r.description);
+  map.read("urdf_file", r.urdf_file);
+  const YAML::Node links = listOf(map, "links", "a list of link names");
+  for (std::size_t k = 0; k < links.size(); ++k) {
+    r.links.push_back(toName(links[k], indexed(map.keyOf("links"), k)));
+  }
+  map.read("padding", r.padding);
+  const MapReader friction(map.get("friction"), map.keyOf("friction"), {"static", "kinetic"});
+  friction.read("static", r.friction.static_coefficient);
+  friction.read("kinetic", r.friction.kinetic_coefficient);
+  map.read("pose", r.pose);
+  const YAML::Node trajectory =
+      listOf(map, "joint_trajectory", "a list of waypoints {t, positions: {joint: value}}");
+  for (std::size_t k = 0; k < trajectory.size(); ++k) {
+    r.joint_trajectory.push_back(
+        readJointWaypoint(trajectory[k], indexed(map.keyOf("joint_trajectory"), k)));
+  }
 }
 
 // Top-level keys accepted and ignored: see scene_yaml.h.
@@ -361,7 +434,7 @@ const Names kIgnoredTopLevelKeys = {"description"};
 SceneConfig readScene(const YAML::Node& root) {
   const MapReader map(root, "",
                       {"frame_id", "step_rate", "publish_rate", "solver", "cloth", "granular",
-                       "grippers", "bounds", "obstacles"},
+                       "grippers", "bounds", "obstacles", "robot"},
                       kIgnoredTopLevelKeys);
   SceneConfig scene;
   map.read("frame_id", scene.frame_id);
@@ -385,6 +458,7 @@ SceneConfig readScene(const YAML::Node& root) {
   const MapReader bounds_map(bounds, "bounds", {"min", "max"});
   bounds_map.read("min", scene.bounds.min);
   bounds_map.read("max", scene.bounds.max);
+  readRobot(map.get("robot"), scene.robot);
   return scene;
 }
 
@@ -409,7 +483,7 @@ bool parseIndex(const std::string& part, std::size_t& index) {
 
 }  // namespace
 
-SceneConfig sceneFromYaml(const YAML::Node& root) {
+SceneConfig sceneFromYaml(const YAML::Node& root, const std::string& base_directory) {
   SceneConfig scene;
   try {
     scene = readScene(root);
@@ -417,6 +491,13 @@ SceneConfig sceneFromYaml(const YAML::Node& root) {
     // Every conversion above names its key; this is the backstop for yaml-cpp surprises.
     throw ConfigError("scene", e.what());
   }
+  // Paths are stored resolved, so messages, warnings and later reloads name the file actually read.
+  for (ObstacleConfig& o : scene.obstacles) {
+    if (o.shape == ShapeType::kMesh) o.mesh = resolveScenePath(o.mesh, base_directory);
+  }
+  scene.robot.urdf_file = resolveScenePath(scene.robot.urdf_file, base_directory);
+  loadObstacleMeshes(scene);
+  if (!scene.robot.urdf_file.empty()) loadRobotFile(scene);
   validate(scene);
   return scene;
 }
@@ -431,7 +512,14 @@ YAML::Node loadSceneYaml(const std::string& path) {
   }
 }
 
-SceneConfig loadScene(const std::string& path) { return sceneFromYaml(loadSceneYaml(path)); }
+SceneConfig loadScene(const std::string& path) {
+  return sceneFromYaml(loadSceneYaml(path), sceneFileDirectory(path));
+}
+
+std::string sceneFileDirectory(const std::string& path) {
+  // "scene.yaml" has no directory part: "", the current directory.
+  return std::filesystem::path(path).parent_path().string();
+}
 
 void applyOverride(YAML::Node& root, const std::string& assignment) {
   const std::size_t equals = assignment.find('=');

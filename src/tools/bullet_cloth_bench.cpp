@@ -30,6 +30,7 @@
 #include "pbd_cloth/collisions.h"
 #include "pbd_cloth/metrics.h"
 #include "pbd_cloth/scene_yaml.h"
+#include "pbd_cloth/triangle_mesh.h"
 
 namespace {
 
@@ -284,6 +285,23 @@ class BulletCloth {
           pose.setIdentity();
           break;
         }
+        case pbd_cloth::ShapeType::kCylinder:
+          shape = new btCylinderShapeZ(btVector3(static_cast<btScalar>(obstacle.radius),
+                                                 static_cast<btScalar>(obstacle.radius),
+                                                 static_cast<btScalar>(0.5 * obstacle.length)));
+          break;
+        case pbd_cloth::ShapeType::kMesh: {
+          // A static concave mesh: Bullet's own BVH over the same (welded, scaled) triangles.
+          auto mesh = std::make_unique<btTriangleMesh>();
+          const auto& vertices = obstacle.mesh_data->vertices();
+          for (const auto& triangle : obstacle.mesh_data->triangles()) {
+            mesh->addTriangle(toBullet(vertices[triangle[0]]), toBullet(vertices[triangle[1]]),
+                              toBullet(vertices[triangle[2]]));
+          }
+          shape = new btBvhTriangleMeshShape(mesh.get(), true);
+          meshes_.push_back(std::move(mesh));
+          break;
+        }
       }
       shapes_.emplace_back(shape);
       btRigidBody::btRigidBodyConstructionInfo info(0, nullptr, shape);
@@ -293,6 +311,7 @@ class BulletCloth {
     }
   }
 
+  std::vector<std::unique_ptr<btTriangleMesh>> meshes_;  // kept alive for their shapes
   std::unique_ptr<btSoftBodyRigidBodyCollisionConfiguration> collision_configuration_;
   std::unique_ptr<btCollisionDispatcher> dispatcher_;
   std::unique_ptr<btBroadphaseInterface> broadphase_;
@@ -353,7 +372,11 @@ int run(const Options& options) {
   for (const std::string& assignment : options.overrides) {
     pbd_cloth::applyOverride(root, assignment);
   }
-  pbd_cloth::SceneConfig scene = pbd_cloth::sceneFromYaml(root);
+  pbd_cloth::SceneConfig scene =
+      pbd_cloth::sceneFromYaml(root, pbd_cloth::sceneFileDirectory(options.config));
+  for (const std::string& warning : scene.load_warnings) {
+    std::fprintf(stderr, "warning: %s\n", warning.c_str());
+  }
   scene.granular.count = 0;  // the cloth only: Bullet's node i is pbd_cloth's particle i
   if (!options.quiet) warnAboutUnsupported(scene);
 

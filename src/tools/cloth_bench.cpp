@@ -311,7 +311,11 @@ int run(const Options& options) {
   for (const std::string& assignment : options.overrides) {
     pbd_cloth::applyOverride(root, assignment);
   }
-  const pbd_cloth::SceneConfig scene = pbd_cloth::sceneFromYaml(root);
+  const pbd_cloth::SceneConfig scene =
+      pbd_cloth::sceneFromYaml(root, pbd_cloth::sceneFileDirectory(options.config));
+  for (const std::string& warning : scene.load_warnings) {
+    std::fprintf(stderr, "warning: %s\n", warning.c_str());
+  }
   if (options.target_max_strain > 0.0 || options.target_mean_strain > 0.0) {
     return searchCheapest(scene, options);
   }

@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "../core/mesh_builders.h"
 #include "pbd_cloth/cloth_builder.h"
 #include "pbd_cloth/collisions.h"
 #include "pbd_cloth/scene_yaml.h"
@@ -192,6 +193,40 @@ void BM_SphereCollision(benchmark::State& state) {
   runContactPasses(state, rig, rig.particles.cloth_count, "per particle-sphere test");
 }
 
+// The same contact against the same ball as a closed triangle mesh (an icosphere of 20 * 4^level
+// triangles): ns per particle-mesh test, exact closest-triangle search over the tree included.
+void BM_MeshSphereCollision(benchmark::State& state) {
+  SceneConfig scene = clothScene(Method::kXpbd, 1, false);
+  scene.cloth.rpy = Eigen::Vector3d::Zero();
+  scene.cloth.origin = Eigen::Vector3d(-0.5, 0.5, 0.55);
+  scene.cloth.pinned.clear();
+  Pose pose;
+  pose.position = Eigen::Vector3d(0.0, 0.0, 0.3);
+  const test::MeshGeometry ball = test::icosphere(0.3, static_cast<int>(state.range(0)));
+  scene.obstacles.push_back(test::meshObstacle("ball", ball, pose));
+  ContactRig rig(scene);
+  runContactPasses(state, rig, rig.particles.cloth_count, "per particle-mesh test");
+}
+
+// One signed-distance query of a mesh alone, at points within 5 cm of an icosphere's surface.
+void BM_MeshSignedDistance(benchmark::State& state) {
+  const auto mesh = test::icosphere(0.3, static_cast<int>(state.range(0))).build();
+  std::vector<Vec3> points;
+  for (int k = 0; k < 1024; ++k) {
+    const double phi = 2.399963 * k, z = 1.0 - 2.0 * (k + 0.5) / 1024.0;  // a Fibonacci sphere
+    const double rho = std::sqrt(1.0 - z * z), r = 0.25 + 0.1 * ((k * 37) % 100) / 100.0;
+    points.emplace_back(r * rho * std::cos(phi), r * rho * std::sin(phi), r * z);
+  }
+  double sum = 0.0;
+  std::size_t k = 0;
+  for (auto _ : state) {
+    Vec3 normal;
+    sum += mesh->signedDistance(points[k++ & 1023], normal);
+  }
+  benchmark::DoNotOptimize(sum);
+  state.SetLabel(std::to_string(mesh->triangleCount()) + " triangles");
+}
+
 // Particle pairs: 1000 granular particles of 1 cm on a lattice squeezed to 90 % of its pitch, so
 // neighbours overlap by 0.2 r. ns per particle per pass (all its pair tests).
 void BM_ParticlePairs(benchmark::State& state) {
@@ -310,6 +345,13 @@ BENCHMARK(BM_BendProjection)
     ->UseManualTime()
     ->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_SphereCollision)->UseManualTime()->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_MeshSphereCollision)
+    ->ArgName("level")
+    ->Arg(3)
+    ->Arg(5)
+    ->UseManualTime()
+    ->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_MeshSignedDistance)->ArgName("level")->Arg(3)->Arg(5)->Unit(benchmark::kNanosecond);
 BENCHMARK(BM_ParticlePairs)->UseManualTime()->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_SelfCollision)->UseManualTime()->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_SelfCollisionBroadPhase)->UseManualTime()->Unit(benchmark::kMicrosecond);

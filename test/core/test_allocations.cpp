@@ -9,6 +9,7 @@
 #include <new>
 #include <vector>
 
+#include "pbd_cloth/scene_assets.h"
 #include "pbd_cloth/simulation.h"
 #include "test_scenes.h"
 
@@ -105,6 +106,26 @@ TEST(Allocations, StepWithCollisionsAllocatesNothingAfterWarmUp) {
     const long count = allocationsPerRun(scene, 20);
     EXPECT_EQ(count, 0) << toString(method);
   }
+}
+
+// Forward kinematics runs every step: with `out` at its size it allocates nothing (a revolute,
+// prismatic, fixed and mimic joint on the way).
+TEST(Allocations, RobotLinkPosesAllocateNothing) {
+  SceneConfig scene;
+  scene.robot.urdf_file = std::string(PBD_CLOTH_SOURCE_DIR) + "/test/data/planar_arm.urdf";
+  loadRobotFile(scene);
+  const RobotModel& model = scene.robot.model;
+  std::vector<double> positions(model.joints.size(), 0.2);
+  std::vector<Pose> poses(model.links.size());
+  g_allocations = 0;
+  g_counting = true;
+  for (int k = 0; k < 100; ++k) {
+    positions[0] = 0.01 * k;
+    model.linkPoses(Pose(), positions, poses);
+  }
+  g_counting = false;
+  EXPECT_EQ(g_allocations.load(), 0);
+  EXPECT_EQ(poses.size(), model.links.size());
 }
 
 }  // namespace

@@ -423,7 +423,8 @@ INSTANTIATE_TEST_SUITE_P(
         BadValue{"grippers.0.trajectory.1.grasp=1.5", "grippers[0].trajectory[1].grasp",
                  "true or false"},
         BadValue{"obstacles.0.radius=0", "obstacles[0].radius", "> 0"},
-        BadValue{"obstacles.0.shape=cone", "obstacles[0].shape", "sphere, box, capsule, plane"},
+        BadValue{"obstacles.0.shape=cone", "obstacles[0].shape",
+                 "sphere, box, capsule, cylinder, plane, mesh"},
         BadValue{"obstacles.0.pose=[0, 0, .nan, 0, 0, 0, 1]", "obstacles[0].pose", "finite"},
         BadValue{"obstacles.1.name=ball", "obstacles[1].name", "used twice"},
         BadValue{"obstacles.1.name=left", "obstacles[1].name", "used twice"},  // a gripper's

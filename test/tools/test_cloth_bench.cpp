@@ -128,6 +128,35 @@ TEST(ClothBench, BadKeyOrArgumentExitsWithTwoAndNamesIt) {
   EXPECT_NE(run.out.find("--duration"), std::string::npos) << run.out;
 }
 
+// A scene with a robot URDF and a mesh obstacle, run from another working directory: the files
+// are found relative to the scene file, load warnings go to stderr, a bad mesh stops the run.
+TEST(ClothBench, RobotSceneFilesAreRelativeToTheSceneFile) {
+  const std::string data = std::string(PBD_CLOTH_SOURCE_DIR) + "/test/data";
+  const std::string bench =
+      std::string("cd / && ") + CLOTH_BENCH + " --config " + data + "/robot_scene.yaml";
+  BenchRun run = runShell(bench + " --quiet --duration 0.1");
+  EXPECT_EQ(run.status, 0) << run.out;
+  EXPECT_EQ(keyValues(run.out)["finite"], "1") << run.out;
+  EXPECT_EQ(run.out.find("warning"), std::string::npos) << run.out;
+
+  run = runShell(bench + " --quiet --duration 0.1 --set obstacles.0.mesh=open_square.obj");
+  EXPECT_EQ(run.status, 0) << run.out;
+  EXPECT_NE(run.out.find("warning: obstacles[0].mesh: mesh '" + data +
+                         "/open_square.obj' has 4 open boundary edges"),
+            std::string::npos)
+      << run.out;
+
+  run = runShell(bench + " --quiet --duration 0.1 --set robot.links=[body,elbow]");
+  EXPECT_EQ(run.status, 2) << run.out;
+  EXPECT_NE(run.out.find("robot.links[1]: no link 'elbow'"), std::string::npos) << run.out;
+
+  run = runShell(bench + " --quiet --duration 0.1 --set obstacles.0.mesh=missing.stl");
+  EXPECT_EQ(run.status, 2) << run.out;
+  EXPECT_NE(run.out.find("obstacles[0].mesh: mesh file '" + data + "/missing.stl' not found"),
+            std::string::npos)
+      << run.out;
+}
+
 // The search's answer meets the target, and one substep less at the same iterations does not:
 // it is the cheapest of its column, not just some setting that meets.
 TEST(ClothBench, TargetSearchFindsTheFewestSubstepsThatMeet) {
