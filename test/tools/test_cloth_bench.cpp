@@ -1,6 +1,6 @@
 // cloth_bench as a user runs it (the program, its output line, its files and its exit status),
-// and the package's source style. The accuracy tests drive the core directly; these check the
-// tool the charts and the README figures come from.
+// the package's source style and its generated meshes. The accuracy tests drive the core directly;
+// these check the tool the charts and the README figures come from.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
@@ -198,6 +198,15 @@ TEST(SourceStyle, EveryCppFileIsClangFormatted) {
                                 " -print0 | xargs -0 clang-format --dry-run --Werror");
   EXPECT_EQ(run.status, 0) << "not clang-formatted (run clang-format -i on these):\n"
                            << run.out.substr(0, 4000);
+}
+
+// The shipped STL meshes (config/meshes, urdf/meshes) are closed, outward and of their analytic
+// volume, and are exactly the bytes scripts/make_meshes writes: regenerated, not hand-edited.
+TEST(ShippedMeshes, AreClosedAndWhatMakeMeshesWrites) {
+  const BenchRun run = runShell(std::string("/usr/bin/python3 '") + PBD_CLOTH_SOURCE_DIR +
+                                "/scripts/make_meshes' --compare");
+  EXPECT_EQ(run.status, 0) << run.out;
+  EXPECT_NE(run.out.find("urdf/meshes/palm.stl"), std::string::npos) << run.out;
 }
 
 }  // namespace
