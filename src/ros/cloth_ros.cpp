@@ -459,6 +459,9 @@ void ClothRos::stepOnce() {
   driveBodies(step_clock_.stateTime(sim_->time() + period).toSec());
   sim_->step();
   real_time_factor_.add(ros::WallTime::now().toSec(), sim_->time());
+  if (!config_.publish_clock) {
+    clock_factor_.add(ros::Time::now().toSec(), sim_->time());
+  }
   diagnostics_->addStep(sim_->stats().step_wall_time);
   warnAboutDegenerateConstraints();
 
@@ -512,6 +515,13 @@ void ClothRos::diagnosticsCallback(const ros::WallTimerEvent& /*event*/) {
   health.real_time_factor = real_time_factor_.value();
   // Half a window: enough wall time that one late timer tick does not decide the verdict.
   health.real_time_factor_valid = real_time_factor_.span() >= 0.5;
+  if (config_.publish_clock) {
+    health.time_source = TimeSource::kOwnClock;
+  } else if (ros::Time::isSimTime()) {
+    health.time_source = TimeSource::kRosClock;
+    health.clock_factor = clock_factor_.value();
+    health.clock_factor_valid = clock_factor_.span() >= 0.5;
+  }
   health.substeps = static_cast<int>(stats.substeps);
   health.iterations = static_cast<int>(stats.iterations);
   health.max_strain = stats.max_strain;
@@ -544,7 +554,9 @@ void ClothRos::resetSimulation(const ros::Time& origin) {
     // The simulation starts with every link enabled; the next poll leaves out those without tf.
     body.link_enabled = true;
   }
-  real_time_factor_.clear();  // simulated time jumps back: old samples would give a negative rate
+  // Simulated time jumps back: old samples would give a negative rate.
+  real_time_factor_.clear();
+  clock_factor_.clear();
   // Publish the initial state at once, so a client sees it before the next step moves it.
   publishState();
 }

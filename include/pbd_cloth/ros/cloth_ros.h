@@ -186,6 +186,9 @@ class ClothRos {
   PublishTicks publish_ticks_;
   bool waiting_for_clock_ = false;  // logged that no /clock has arrived yet
   RealTimeFactor real_time_factor_;
+  // Simulated s per s of ROS time, for the diagnostics under /use_sim_time: whether the steps
+  // keep up with /clock.
+  RealTimeFactor clock_factor_;
   InputRejections rejections_;  // has its own lock: the input thread rejects without mutex_
 
   tf2_ros::Buffer tf_buffer_;
