@@ -118,11 +118,11 @@ const char* toString(ShapeType shape);
 // One collision shape: an obstacle of the scene, or one <collision> element of a robot link (then
 // `pose` is the element's origin in the link frame and `name` is "<link>/<index>").
 struct ObstacleConfig {
-  std::string name;                       // obstacles[i].name
-  ShapeType shape = ShapeType::kSphere;   // obstacles[i].shape
-  double radius = 0.1;                    // sphere, capsule, cylinder
-  Eigen::Vector3d size{1.0, 1.0, 1.0};    // box: full edge lengths
-  double length = 0.5;                    // capsule: between the end-sphere centres; cylinder: height
+  std::string name;                      // obstacles[i].name
+  ShapeType shape = ShapeType::kSphere;  // obstacles[i].shape
+  double radius = 0.1;                   // sphere, capsule, cylinder
+  Eigen::Vector3d size{1.0, 1.0, 1.0};   // box: full edge lengths
+  double length = 0.5;  // capsule: between the end-sphere centres; cylinder: height
   Eigen::Vector3d normal{0.0, 0.0, 1.0};  // plane: unit normal
   double offset = 0.0;                    // plane: free side is n.p - offset >= 0
   std::string mesh;                       // mesh: file path, file:// or package:// URI
@@ -130,10 +130,11 @@ struct ObstacleConfig {
   // mesh: the loaded, scaled mesh with its distance structure (scene reader: scene_assets.h).
   // Shared: copies of the scene (reset, live tuning) do not copy the mesh.
   std::shared_ptr<const TriangleMesh> mesh_data;
-  Pose pose;                              // obstacles[i].pose
-  std::string tf_frame;                   // obstacles[i].tf_frame: follow this frame (node)
-  double padding = 0.0;                   // m added around the shape (robot links: robot.padding)
-  // Friction of contacts with this shape; cloth.friction when not set (robot links: robot.friction).
+  Pose pose;             // obstacles[i].pose
+  std::string tf_frame;  // obstacles[i].tf_frame: follow this frame (node)
+  double padding = 0.0;  // m added around the shape (robot links: robot.padding)
+  // Friction of contacts with this shape; cloth.friction when not set (robot links:
+  // robot.friction).
   bool has_friction = false;
   FrictionConfig friction;
 };
@@ -146,7 +147,7 @@ struct RobotJoint {
   JointType type = JointType::kFixed;
   int parent_link = -1;  // index into RobotModel::links
   int child_link = -1;
-  Pose origin;  // child joint frame in the parent link frame at position 0
+  Pose origin;                          // child joint frame in the parent link frame at position 0
   Eigen::Vector3d axis{1.0, 0.0, 0.0};  // unit, in the joint frame
   double lower = 0.0, upper = 0.0;      // limits (revolute, prismatic); not enforced by FK
   int mimic_joint = -1;                 // position = multiplier * mimicked + offset
@@ -178,17 +179,17 @@ struct RobotModel {
 };
 
 struct JointWaypoint {
-  double t = 0.0;                                           // s since start
+  double t = 0.0;                                         // s since start
   std::vector<std::pair<std::string, double>> positions;  // joint name -> rad or m
 };
 
 struct RobotConfig {
-  bool enabled = false;                        // true when the scene has a `robot` key
+  bool enabled = false;                           // true when the scene has a `robot` key
   std::string description = "robot_description";  // robot.description (node: URDF parameter)
-  std::string urdf_file;                       // robot.urdf_file
-  std::vector<std::string> links;              // robot.links; empty = every link with <collision>
-  double padding = 0.0;                        // robot.padding (m)
-  FrictionConfig friction;                     // robot.friction
+  std::string urdf_file;                          // robot.urdf_file
+  std::vector<std::string> links;               // robot.links; empty = every link with <collision>
+  double padding = 0.0;                         // robot.padding (m)
+  FrictionConfig friction;                      // robot.friction
   std::vector<JointWaypoint> joint_trajectory;  // robot.joint_trajectory
   Pose pose;  // robot.pose: the root link in frame_id when posed by joint_trajectory (FK)
   // The parsed URDF (scene_assets.h); links not selected by `links` stay in the tree without

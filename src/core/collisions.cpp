@@ -18,6 +18,12 @@ constexpr double kOverlapSlop = 0.02;
 // unconstrained prediction and the constrained motion.
 constexpr double kBoxSlack = 0.5;
 
+// True when a sphere of radius r at x lies wholly outside the box [lo, hi]: it cannot touch a
+// shape inside that box.
+bool outsideBounds(const Vec3& x, double r, const Vec3& lo, const Vec3& hi) {
+  return (x.array() + r < lo.array()).any() || (x.array() - r > hi.array()).any();
+}
+
 }  // namespace
 
 void Collisions::configure(const SceneConfig& scene) {
@@ -244,10 +250,20 @@ double Collisions::project(Particles& particles, const ClothTopology& topology) 
 
 void Collisions::preStabilizeObstacles(Particles& p, double max_shift) {
   const std::size_t count = shapes_.size();
+  for (std::size_t k = 0; k < count; ++k) {
+    worldBounds(shapes_[k], frame_end_[k], obstacle_lo_[k], obstacle_hi_[k]);
+  }
   for (int i = 0; i < p.size(); ++i) {
     if (p.inverse_mass[i] == 0.0) continue;
     for (std::size_t k = 0; k < count; ++k) {
       if (!enabled_[k]) continue;
+      const std::size_t slot = static_cast<std::size_t>(i) * count + k;
+      // Outside the shape's bounds grown by the radius: no overlap to separate (and no query,
+      // which for a mesh is a tree search).
+      if (outsideBounds(p.position[i], p.radius[i], obstacle_lo_[k], obstacle_hi_[k])) {
+        obstacle_allowance_[slot] = 0.0;
+        continue;
+      }
       Vec3 normal;
       const double clearance =
           signedDistance(shapes_[k], frame_end_[k].toLocal(p.position[i]), normal) - p.radius[i];
@@ -257,8 +273,7 @@ void Collisions::preStabilizeObstacles(Particles& p, double max_shift) {
         p.position[i] += shift * (frame_end_[k].rotation * normal);
         left = -clearance - shift;
       }
-      obstacle_allowance_[static_cast<std::size_t>(i) * count + k] =
-          allowanceFor(left, p.radius[i], kOverlapSlop);
+      obstacle_allowance_[slot] = allowanceFor(left, p.radius[i], kOverlapSlop);
     }
   }
 }
@@ -379,8 +394,11 @@ double Collisions::maxPenetration(const Particles& particles, const ClothTopolog
   for (std::size_t k = 0; k < shapes_.size(); ++k) {
     if (!enabled_[k]) continue;
     const Frame frame = frameFromPose(obstacles_[k].pose);
+    Vec3 lo, hi;
+    worldBounds(shapes_[k], frame, lo, hi);
     for (int i = 0; i < particles.size(); ++i) {
       if (particles.inverse_mass[i] == 0.0) continue;  // prescribed: not the solver's to fix
+      if (outsideBounds(particles.position[i], particles.radius[i], lo, hi)) continue;
       depth = std::max(depth, particles.radius[i] -
                                   signedDistance(shapes_[k], frame.toLocal(particles.position[i])));
     }

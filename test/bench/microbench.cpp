@@ -227,6 +227,19 @@ void BM_MeshSignedDistance(benchmark::State& state) {
   state.SetLabel(std::to_string(mesh->triangleCount()) + " triangles");
 }
 
+// Building a mesh shape at load (welding, pseudo-normals, tree): time and the bytes it holds.
+void BM_MeshBuild(benchmark::State& state) {
+  const test::MeshGeometry ball = test::icosphere(0.3, static_cast<int>(state.range(0)));
+  std::size_t bytes = 0;
+  for (auto _ : state) {
+    const TriangleMesh mesh(ball.vertices, ball.triangles);
+    bytes = mesh.memoryBytes();
+    benchmark::DoNotOptimize(bytes);
+  }
+  state.counters["triangles"] = static_cast<double>(ball.triangles.size());
+  state.counters["bytes"] = static_cast<double>(bytes);
+}
+
 // Particle pairs: 1000 granular particles of 1 cm on a lattice squeezed to 90 % of its pitch, so
 // neighbours overlap by 0.2 r. ns per particle per pass (all its pair tests).
 void BM_ParticlePairs(benchmark::State& state) {
@@ -352,6 +365,7 @@ BENCHMARK(BM_MeshSphereCollision)
     ->UseManualTime()
     ->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_MeshSignedDistance)->ArgName("level")->Arg(3)->Arg(5)->Unit(benchmark::kNanosecond);
+BENCHMARK(BM_MeshBuild)->ArgName("level")->Arg(3)->Arg(5)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ParticlePairs)->UseManualTime()->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_SelfCollision)->UseManualTime()->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_SelfCollisionBroadPhase)->UseManualTime()->Unit(benchmark::kMicrosecond);

@@ -13,6 +13,7 @@
 
 #include "pbd_cloth/cloth_builder.h"
 #include "pbd_cloth/metrics.h"
+#include "pbd_cloth/scene_assets.h"
 #include "pbd_cloth/scene_yaml.h"
 #include "pbd_cloth/simulation.h"
 
@@ -605,6 +606,11 @@ TEST(ShippedConfigs, EveryConfigLoadsAndSteps) {
     SCOPED_TRACE(path);
     SceneConfig scene;
     ASSERT_NO_THROW(scene = loadScene(path));
+    if (scene.robot.enabled && scene.robot.urdf_file.empty()) {
+      // The node reads robot_description; the shipped robot scenes are for the demo arm.
+      scene.robot.urdf_file = PBD_CLOTH_SOURCE_DIR "/urdf/demo_arm.urdf";
+      ASSERT_NO_THROW(loadRobotFile(scene));
+    }
     Simulation sim(scene);
     for (int k = 0; k < 5; ++k) sim.step();
     EXPECT_TRUE(allFinite(sim.particles()));

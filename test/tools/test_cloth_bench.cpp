@@ -1,9 +1,10 @@
 // cloth_bench as a user runs it (the program, its output line, its files and its exit status),
-// and the package's source style. The accuracy tests drive the core directly; these check the
-// tool the charts and the README figures come from.
+// the package's source style and its generated meshes. The accuracy tests drive the core directly;
+// these check the tool the charts and the README figures come from.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <fstream>
@@ -157,6 +158,45 @@ TEST(ClothBench, RobotSceneFilesAreRelativeToTheSceneFile) {
       << run.out;
 }
 
+// The largest y of the particles in a --positions file (index,x,y,z lines).
+double maxY(const std::string& positions_file) {
+  std::istringstream lines(readFile(positions_file));
+  std::string line;
+  double max_y = -1e300;
+  while (std::getline(lines, line)) {
+    double index, x, y, z;
+    if (std::sscanf(line.c_str(), "%lf,%lf,%lf,%lf", &index, &x, &y, &z) == 4) {
+      max_y = std::max(max_y, y);
+    }
+  }
+  return max_y;
+}
+
+// End to end through the URDF reader: a paddle link with a sphere, a box, a cylinder and a mesh,
+// swept at 2 m/s through a hanging cloth by robot.joint_trajectory (forward kinematics), pushes it
+// along (the cloth hangs in y = 0 without it) with no penetration beyond the thickness (5 mm).
+TEST(ClothBench, UrdfRobotSweptThroughTheClothPushesItWithoutPenetration) {
+  const std::string bench = std::string(CLOTH_BENCH) + " --config " + PBD_CLOTH_SOURCE_DIR +
+                            "/test/data/robot_sweep.yaml --quiet --duration 0.7 --positions ";
+  const std::string pushed = ::testing::TempDir() + "robot_sweep_positions.csv";
+  const BenchRun run = runShell(bench + pushed);
+  ASSERT_EQ(run.status, 0) << run.out;
+  std::map<std::string, std::string> values = keyValues(run.out);
+  EXPECT_EQ(values["finite"], "1") << run.out;
+  EXPECT_LT(std::stod(values["max_penetration"]), 0.005) << run.out;
+  // The paddle ends at y = 0.3; the cloth it carried is at least 0.2 m forward.
+  EXPECT_GT(maxY(pushed), 0.2);
+
+  // The same run with no link that collides (base_link has no collision element: a warning).
+  const std::string alone = ::testing::TempDir() + "robot_sweep_positions_alone.csv";
+  const BenchRun without = runShell(bench + alone + " --set 'robot.links=[base_link]'");
+  ASSERT_EQ(without.status, 0) << without.out;
+  EXPECT_NE(without.out.find("warning: robot.links[0]: link 'base_link' has no collision element"),
+            std::string::npos)
+      << without.out;
+  EXPECT_LT(maxY(alone), 0.01);
+}
+
 // The search's answer meets the target, and one substep less at the same iterations does not:
 // it is the cheapest of its column, not just some setting that meets.
 TEST(ClothBench, TargetSearchFindsTheFewestSubstepsThatMeet) {
@@ -198,6 +238,15 @@ TEST(SourceStyle, EveryCppFileIsClangFormatted) {
                                 " -print0 | xargs -0 clang-format --dry-run --Werror");
   EXPECT_EQ(run.status, 0) << "not clang-formatted (run clang-format -i on these):\n"
                            << run.out.substr(0, 4000);
+}
+
+// The shipped STL meshes (config/meshes, urdf/meshes) are closed, outward and of their analytic
+// volume, and are exactly the bytes scripts/make_meshes writes: regenerated, not hand-edited.
+TEST(ShippedMeshes, AreClosedAndWhatMakeMeshesWrites) {
+  const BenchRun run = runShell(std::string("/usr/bin/python3 '") + PBD_CLOTH_SOURCE_DIR +
+                                "/scripts/make_meshes' --compare");
+  EXPECT_EQ(run.status, 0) << run.out;
+  EXPECT_NE(run.out.find("urdf/meshes/palm.stl"), std::string::npos) << run.out;
 }
 
 }  // namespace
