@@ -14,6 +14,7 @@
 #include "pbd_cloth/metrics.h"
 #include "pbd_cloth/ros/ros_conversions.h"
 #include "pbd_cloth/ros/ros_params.h"
+#include "pbd_cloth/scene_assets.h"
 
 namespace pbd_cloth {
 namespace {
@@ -48,13 +49,20 @@ void logGrasp(const std::string& gripper, const GraspResult& result) {
 ClothRos::ClothRos(ros::NodeHandle nh, ros::NodeHandle nh_private)
     : nh_(nh), nh_private_(nh_private) {
   try {
-    sim_ = std::make_unique<Simulation>(readSceneParameters(nh_private_));
+    SceneConfig scene = readSceneParameters(nh_private_);
+    if (scene.robot.enabled && scene.robot.urdf_file.empty()) {
+      loadRobotDescription(scene);
+    }
+    sim_ = std::make_unique<Simulation>(scene);
     config_ = readNodeParameters(nh_private_);
   } catch (const ConfigError& error) {
     ROS_FATAL("Invalid parameter in %s: %s", nh_private_.getNamespace().c_str(), error.what());
     throw;
   }
   const SceneConfig& scene = sim_->scene();
+  for (const std::string& warning : scene.load_warnings) {
+    ROS_WARN("Scene: %s", warning.c_str());
+  }
   step_clock_ = StepClock(StepClock::Config{1.0 / scene.step_rate, config_.max_catch_up_steps});
   publish_ticks_ = PublishTicks(scene.publish_rate);
   ROS_INFO(
@@ -125,19 +133,73 @@ ClothRos::~ClothRos() {
   input_spinner_->stop();
 }
 
+const char* ClothRos::kindName(BodyKind kind) {
+  switch (kind) {
+    case BodyKind::kGripper:
+      return "gripper";
+    case BodyKind::kObstacle:
+      return "obstacle";
+    case BodyKind::kRobotLink:
+      return "robot link";
+  }
+  return "body";
+}
+
+void ClothRos::loadRobotDescription(SceneConfig& scene) const {
+  // Resolved like any ROS name (robot_state_publisher's way): "robot_description" in the node's
+  // namespace, so a robot in a namespace brings its own.
+  const std::string parameter = nh_.resolveName(scene.robot.description);
+  XmlRpc::XmlRpcValue value;
+  if (!nh_.getParam(parameter, value)) {
+    throw ConfigError("robot.description",
+                      "no parameter '" + parameter +
+                          "' with the robot's URDF (load it as robot_state_publisher needs it, "
+                          "e.g. <param name=\"robot_description\" textfile=\"...urdf\"/>, or "
+                          "give robot.urdf_file)");
+  }
+  if (value.getType() != XmlRpc::XmlRpcValue::TypeString) {
+    throw ConfigError("robot.description",
+                      "parameter '" + parameter + "' is not a string (it must hold the URDF text)");
+  }
+  loadRobot(scene, static_cast<std::string>(value), "parameter '" + parameter + "'");
+  ROS_INFO("Robot '%s' from parameter '%s': %zu links.", scene.robot.model.name.c_str(),
+           parameter.c_str(), scene.robot.model.links.size());
+}
+
 void ClothRos::createBodies() {
   ros::NodeHandle input_nh(nh_private_);
   input_nh.setCallbackQueue(&input_queue_);
-  bodies_.resize(sim_->gripperCount() + sim_->obstacleCount());
+  const int grippers = sim_->gripperCount();
+  const int obstacles = sim_->obstacleCount();
+  std::vector<int> links;
+  for (int l = 0; l < sim_->robotLinkCount(); ++l) {
+    if (sim_->robotLinkHasCollision(l)) links.push_back(l);
+  }
+  bodies_.resize(grippers + obstacles + links.size());
   for (std::size_t k = 0; k < bodies_.size(); ++k) {
     Body& body = bodies_[k];
-    body.is_gripper = static_cast<int>(k) < sim_->gripperCount();
-    body.index = body.is_gripper ? static_cast<int>(k) : static_cast<int>(k) - sim_->gripperCount();
-    body.name = body.is_gripper ? sim_->gripperName(body.index) : sim_->obstacle(body.index).name;
+    const int i = static_cast<int>(k);
     body.follower = PoseFollower(config_.follower);
-    body.pose_topic = nh_private_.resolveName(body.name + "/pose");
-    if (body.is_gripper) {
+    if (i < grippers) {
+      body.kind = BodyKind::kGripper;
+      body.index = i;
+      body.name = sim_->gripperName(body.index);
       body.tf_frame = sim_->scene().grippers[body.index].tf_frame;
+    } else if (i < grippers + obstacles) {
+      body.kind = BodyKind::kObstacle;
+      body.index = i - grippers;
+      body.name = sim_->obstacle(body.index).name;
+      body.tf_frame = sim_->scene().obstacles[body.index].tf_frame;
+    } else {
+      // robot_state_publisher names each link's frame after the link.
+      body.kind = BodyKind::kRobotLink;
+      body.index = links[i - grippers - obstacles];
+      body.name = sim_->robotLinkName(body.index);
+      body.tf_frame = body.name;
+      continue;
+    }
+    body.pose_topic = nh_private_.resolveName(body.name + "/pose");
+    if (body.kind == BodyKind::kGripper) {
       body.grasp_service =
           nh_private_.advertiseService<std_srvs::SetBool::Request, std_srvs::SetBool::Response>(
               body.name + "/grasp", [this, &body](std_srvs::SetBool::Request& request,
@@ -148,9 +210,9 @@ void ClothRos::createBodies() {
           nh_private_.advertise<geometry_msgs::WrenchStamped>(body.name + "/wrench", 1);
     }
     if (!body.tf_frame.empty()) {
-      // One source per gripper: a pose topic beside a followed frame would fight over it.
-      ROS_INFO("Gripper '%s' follows tf frame '%s' (%s is not subscribed).", body.name.c_str(),
-               body.tf_frame.c_str(), body.pose_topic.c_str());
+      // One source per body: a pose topic beside a followed frame would fight over it.
+      ROS_INFO("%s '%s' follows tf frame '%s' (%s is not subscribed).", kindName(body.kind),
+               body.name.c_str(), body.tf_frame.c_str(), body.pose_topic.c_str());
       continue;
     }
     // Every message is kept (up to 10) rather than only the latest, so each one is checked: an
@@ -159,10 +221,24 @@ void ClothRos::createBodies() {
         body.name + "/pose", 10,
         [this, &body](const geometry_msgs::PoseStampedConstPtr& msg) { poseCallback(body, *msg); });
   }
+  if (!links.empty()) {
+    ROS_INFO(
+        "%zu robot links with collision elements follow their tf frames in '%s' (posed by "
+        "robot.joint_trajectory until their tf arrives).",
+        links.size(), sim_->scene().frame_id.c_str());
+  }
 }
 
 Pose ClothRos::currentPose(const Body& body) const {
-  return body.is_gripper ? sim_->gripperPose(body.index) : sim_->obstacle(body.index).pose;
+  switch (body.kind) {
+    case BodyKind::kGripper:
+      return sim_->gripperPose(body.index);
+    case BodyKind::kObstacle:
+      return sim_->obstacle(body.index).pose;
+    case BodyKind::kRobotLink:
+      break;
+  }
+  return sim_->robotLinkPose(body.index);
 }
 
 void ClothRos::poseCallback(Body& body, const geometry_msgs::PoseStamped& msg) {
@@ -196,9 +272,10 @@ double ClothRos::inputTime() const {
   return config_.publish_clock ? stateTime().toSec() : ros::Time::now().toSec();
 }
 
-// Grippers that follow a tf frame take its latest transform every step; each new stamp is a sample
+// Bodies that follow a tf frame take its latest transform every step; each new stamp is a sample
 // for the follower, exactly like a pose message.
 void ClothRos::pollTfFrames(double arrival) {
+  std::string waiting;  // bodies whose frame has never been seen, for one warning
   for (Body& body : bodies_) {
     if (body.tf_frame.empty()) {
       continue;
@@ -206,26 +283,74 @@ void ClothRos::pollTfFrames(double arrival) {
     Pose pose;
     ros::Time stamp;
     PoseTransformer::Failure failure;
-    if (!pose_transformer_->lookupFrame(body.tf_frame, pose, stamp, failure)) {
-      if (body.tf_seen && body.tf_ok) {
+    bool found = pose_transformer_->lookupFrame(body.tf_frame, pose, stamp, failure);
+    // The latest transform of a frame whose broadcaster stopped stays in the buffer (10 s): for a
+    // link that would be a ghost standing in the cloth. Stamp 0 is a static transform.
+    if (found && body.kind == BodyKind::kRobotLink && !stamp.isZero() &&
+        arrival - stamp.toSec() > config_.robot_tf_timeout) {
+      std::ostringstream detail;
+      detail << "newest transform is " << arrival - stamp.toSec() << " s old (~robot_tf_timeout "
+             << config_.robot_tf_timeout << " s)";
+      failure = {RejectReason::kTfFailure, detail.str()};
+      found = false;
+    }
+    if (!found) {
+      if (body.kind == BodyKind::kRobotLink && body.tf_seen) {
+        loseRobotLink(body, failure);
+      } else if (body.tf_seen && body.tf_ok) {
         // Counted once per outage, not once per step of it.
-        rejections_.reject("tf frame '" + body.tf_frame + "' (gripper " + body.name + ")",
-                           failure.reason, failure.detail);
+        rejections_.reject(
+            "tf frame '" + body.tf_frame + "' (" + kindName(body.kind) + " " + body.name + ")",
+            failure.reason, failure.detail);
       } else if (!body.tf_seen) {
         // Not yet a rejected input: the broadcaster may simply start after this node.
-        ROS_WARN_THROTTLE(10.0, "Waiting for tf frame '%s' for gripper '%s': %s",
-                          body.tf_frame.c_str(), body.name.c_str(), failure.detail.c_str());
+        waiting += (waiting.empty() ? "" : ", ") + std::string(kindName(body.kind)) + " '" +
+                   body.name + "' (frame '" + body.tf_frame + "': " + failure.detail + ")";
       }
       body.tf_ok = false;
       continue;
     }
-    body.tf_seen = body.tf_ok = true;
-    // A static frame keeps stamp 0: it becomes a sample once, then the gripper stays there.
-    if (!body.follower.active() || stamp != body.last_stamp) {
-      body.last_stamp = stamp;
+    if (body.kind == BodyKind::kRobotLink && (!body.link_enabled || !body.follower.active())) {
+      placeRobotLink(body, pose, arrival);
+    } else if (!body.follower.active() || stamp != body.last_stamp) {
+      // A static frame keeps stamp 0: it becomes a sample once, then the body stays there.
       body.follower.addSample(currentPose(body), pose, arrival);
     }
+    body.last_stamp = stamp;
+    body.tf_seen = body.tf_ok = true;
   }
+  if (!waiting.empty()) {
+    ROS_WARN_THROTTLE(10.0, "Waiting for tf of %s.", waiting.c_str());
+  }
+}
+
+void ClothRos::loseRobotLink(Body& body, const PoseTransformer::Failure& failure) {
+  if (body.link_enabled) {
+    sim_->setRobotLinkEnabled(body.index, false);
+    body.link_enabled = false;
+  }
+  if (body.tf_ok) {
+    // Counted (and warned about, throttled per link) once per outage.
+    rejections_.reject("tf frame '" + body.tf_frame + "' (robot link " + body.name + ")",
+                       failure.reason,
+                       failure.detail +
+                           "; the link is left out of the collisions until its tf "
+                           "returns");
+  }
+}
+
+void ClothRos::placeRobotLink(Body& body, const Pose& pose, double arrival) {
+  // Placed, not swept: where the link was (the scripted pose, or where its tf was lost) is not a
+  // place it really moved from, and sweeping from there would push the cloth for nothing.
+  sim_->setRobotLinkEnabled(body.index, false);
+  sim_->setRobotLinkPose(body.index, pose);
+  sim_->setRobotLinkEnabled(body.index, true);
+  body.follower.reset();
+  body.follower.addSample(pose, pose, arrival);
+  if (!body.link_enabled) {
+    ROS_INFO("Robot link '%s': its tf frame is back; it collides again.", body.name.c_str());
+  }
+  body.link_enabled = true;
 }
 
 // Bodies that have received a pose are moved to where their follower puts them at the end of the
@@ -237,10 +362,16 @@ void ClothRos::driveBodies(double step_end) {
       continue;
     }
     const Pose pose = body.follower.poseAt(step_end);
-    if (body.is_gripper) {
-      sim_->setGripperPose(body.index, pose);
-    } else {
-      sim_->setObstaclePose(body.index, pose);
+    switch (body.kind) {
+      case BodyKind::kGripper:
+        sim_->setGripperPose(body.index, pose);
+        break;
+      case BodyKind::kObstacle:
+        sim_->setObstaclePose(body.index, pose);
+        break;
+      case BodyKind::kRobotLink:
+        sim_->setRobotLinkPose(body.index, pose);
+        break;
     }
   }
 }
@@ -328,6 +459,9 @@ void ClothRos::stepOnce() {
   driveBodies(step_clock_.stateTime(sim_->time() + period).toSec());
   sim_->step();
   real_time_factor_.add(ros::WallTime::now().toSec(), sim_->time());
+  if (!config_.publish_clock) {
+    clock_factor_.add(ros::Time::now().toSec(), sim_->time());
+  }
   diagnostics_->addStep(sim_->stats().step_wall_time);
   warnAboutDegenerateConstraints();
 
@@ -381,6 +515,13 @@ void ClothRos::diagnosticsCallback(const ros::WallTimerEvent& /*event*/) {
   health.real_time_factor = real_time_factor_.value();
   // Half a window: enough wall time that one late timer tick does not decide the verdict.
   health.real_time_factor_valid = real_time_factor_.span() >= 0.5;
+  if (config_.publish_clock) {
+    health.time_source = TimeSource::kOwnClock;
+  } else if (ros::Time::isSimTime()) {
+    health.time_source = TimeSource::kRosClock;
+    health.clock_factor = clock_factor_.value();
+    health.clock_factor_valid = clock_factor_.span() >= 0.5;
+  }
   health.substeps = static_cast<int>(stats.substeps);
   health.iterations = static_cast<int>(stats.iterations);
   health.max_strain = stats.max_strain;
@@ -410,8 +551,12 @@ void ClothRos::resetSimulation(const ros::Time& origin) {
   for (Body& body : bodies_) {
     body.follower.reset();
     body.last_stamp = ros::Time();
+    // The simulation starts with every link enabled; the next poll leaves out those without tf.
+    body.link_enabled = true;
   }
-  real_time_factor_.clear();  // simulated time jumps back: old samples would give a negative rate
+  // Simulated time jumps back: old samples would give a negative rate.
+  real_time_factor_.clear();
+  clock_factor_.clear();
   // Publish the initial state at once, so a client sees it before the next step moves it.
   publishState();
 }
@@ -495,7 +640,7 @@ void ClothRos::publishMarkers() {
 
 void ClothRos::publishWrenches() {
   for (const Body& body : bodies_) {
-    if (!body.is_gripper || body.wrench_publisher.getNumSubscribers() == 0) {
+    if (body.kind != BodyKind::kGripper || body.wrench_publisher.getNumSubscribers() == 0) {
       continue;
     }
     const auto msg = boost::make_shared<geometry_msgs::WrenchStamped>();

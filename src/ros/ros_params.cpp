@@ -133,6 +133,7 @@ ClothRos::Config readNodeParameters(const ros::NodeHandle& nh_private) {
   readInt("max_catch_up_steps", config.max_catch_up_steps, 1, 1000);
   readBool("publish_clock", config.publish_clock);
   read("max_real_time_factor", config.max_real_time_factor, 0.0, true);
+  read("robot_tf_timeout", config.robot_tf_timeout, 0.0, false);
   if (config.max_real_time_factor > 0.0 && !config.publish_clock) {
     ROS_WARN(
         "%s is %g but %s is false: the limit applies only when the node is the clock; ignored.",

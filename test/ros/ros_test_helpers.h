@@ -73,6 +73,13 @@ class Recorder {
     subscriber_ = nh.subscribe(topic, queue_size, &Recorder::callback, this);
   }
 
+  // Unsubscribes before the messages and the mutex go: roscpp waits for a callback in flight on a
+  // spinner thread, which would otherwise write into a destroyed vector (seen with /clock at
+  // thousands of messages per second).
+  ~Recorder() { subscriber_.shutdown(); }
+  Recorder(const Recorder&) = delete;
+  Recorder& operator=(const Recorder&) = delete;
+
   // True once a publisher of the topic is connected (nothing it sent before was lost).
   bool waitForPublisher(double timeout = 10.0) {
     const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(timeout);

@@ -4,7 +4,8 @@
 //                             someone subscribes), stamped with the time of the state they carry
 //   ~<gripper>/pose           in: geometry_msgs/PoseStamped in any tf frame (not subscribed when
 //                             the gripper follows its scene tf_frame instead)
-//   ~<obstacle>/pose          in: the same, for obstacles (moved as kinematic colliders)
+//   ~<obstacle>/pose          in: the same, for obstacles (moved as kinematic colliders; not
+//                             subscribed when the obstacle follows its scene tf_frame)
 //   ~<gripper>/grasp          std_srvs/SetBool: true grasps what is within the radius (success
 //                             false and the reason when nothing is), false releases
 //   ~<gripper>/wrench         out: geometry_msgs/WrenchStamped, the force the cloth pulls on the
@@ -17,9 +18,23 @@
 //   ~set_parameters, ...      dynamic_reconfigure of cfg/Solver.cfg (solver_reconfigure.h)
 //   /diagnostics              cloth_diagnostics.h
 //   /clock                    out, only with ~publish_clock: rosgraph_msgs/Clock after every step
+//   /<robot.description>      parameter (default /robot_description, resolved in the node's
+//                             namespace): the URDF text, read at start-up when the scene has
+//                             `robot:` without robot.urdf_file
+//   tf                        in: tf_frame of grippers and obstacles, and every robot link that has
+//                             collision elements (frame = link name, as robot_state_publisher
+//                             publishes it), looked up in the scene frame every step
 // Node settings beside the scene: ~tf_timeout, ~pose_period, ~max_pose_period,
-// ~min_real_time_factor, ~max_catch_up_steps, ~publish_clock, ~max_real_time_factor (Config
-// below).
+// ~min_real_time_factor, ~max_catch_up_steps, ~publish_clock, ~max_real_time_factor,
+// ~robot_tf_timeout (Config below).
+//
+// Robot links. Each link with collision elements follows its tf frame through a PoseFollower like
+// any body. Until its tf first arrives the simulation poses it by robot.joint_trajectory. It is
+// placed at its first tf pose without sweeping there (it was never really at the scripted pose).
+// A link whose tf is missing, or whose newest transform is older than ~robot_tf_timeout of ROS
+// time (a static transform, stamp 0, never ages), is left out of the collisions with a warning
+// naming it (counted once per outage as a rejected input); when its tf returns it is placed there
+// and collides again.
 //
 // Time. The state at simulated time t is the world at ROS time origin + t (step_clock.h), and that
 // is the stamp of every message carrying it. Normally ROS time drives the steps: ros::Time::now()
@@ -85,6 +100,9 @@ class ClothRos {
     // ~max_real_time_factor: with publish_clock, at most this many simulated s per wall s; 0: no
     // limit.
     double max_real_time_factor = 0.0;
+    // ~robot_tf_timeout (s of ROS time): a robot link whose newest transform is older is left out.
+    // robot_state_publisher sends moving links at 50 Hz: 0.5 s is 25 missed messages.
+    double robot_tf_timeout = 0.5;
   };
 
   // Reads and validates the scene and the node settings, builds the simulation and starts the
@@ -98,22 +116,30 @@ class ClothRos {
   ClothRos& operator=(const ClothRos&) = delete;
 
  private:
-  // A gripper or an obstacle driven by ~<name>/pose (or, for a gripper, by a tf frame).
+  enum class BodyKind { kGripper, kObstacle, kRobotLink };
+  static const char* kindName(BodyKind kind);
+
+  // A gripper or an obstacle driven by ~<name>/pose or by a tf frame, or a robot link driven by
+  // its tf frame.
   struct Body {
-    bool is_gripper = false;
-    int index = 0;  // in the simulation's grippers or obstacles
+    BodyKind kind = BodyKind::kGripper;
+    int index = 0;  // in the simulation's grippers, obstacles or robot links
     std::string name;
-    std::string pose_topic;  // resolved, for warnings
-    std::string tf_frame;    // grippers only: followed instead of pose_topic when not empty
+    std::string pose_topic;  // resolved, for warnings (not for robot links)
+    std::string tf_frame;    // followed instead of pose_topic when not empty
     PoseFollower follower;
-    ros::Time last_stamp;  // of the last accepted pose (message or tf)
-    bool tf_seen = false;  // tf_frame was found at least once
-    bool tf_ok = false;    // the last poll of tf_frame succeeded
+    ros::Time last_stamp;      // of the last accepted pose (message or tf)
+    bool tf_seen = false;      // tf_frame was found at least once
+    bool tf_ok = false;        // the last poll of tf_frame succeeded
+    bool link_enabled = true;  // robot links: collides (mirrors Simulation::robotLinkEnabled)
     ros::Subscriber pose_subscriber;
     ros::ServiceServer grasp_service;  // grippers only
     ros::Publisher wrench_publisher;   // grippers only
   };
 
+  // Reads the URDF from the parameter robot.description names when the scene has a robot without
+  // robot.urdf_file (ConfigError naming the parameter when it is missing or does not parse).
+  void loadRobotDescription(SceneConfig& scene) const;
   void createBodies();
   // Runs the steps ROS time says are due (not with publish_clock).
   void stepCallback(const ros::WallTimerEvent& event);
@@ -140,6 +166,9 @@ class ClothRos {
   // Back to the initial state with simulated time 0 at `origin`; publishes that state.
   void resetSimulation(const ros::Time& origin);
   void pollTfFrames(double arrival);
+  // A robot link's tf: lost (left out of the collisions) or found (placed without a sweep).
+  void loseRobotLink(Body& body, const PoseTransformer::Failure& failure);
+  void placeRobotLink(Body& body, const Pose& pose, double arrival);
   void driveBodies(double step_end);
   void publishOutputs();
   void publishState();
@@ -157,6 +186,9 @@ class ClothRos {
   PublishTicks publish_ticks_;
   bool waiting_for_clock_ = false;  // logged that no /clock has arrived yet
   RealTimeFactor real_time_factor_;
+  // Simulated s per s of ROS time, for the diagnostics under /use_sim_time: whether the steps
+  // keep up with /clock.
+  RealTimeFactor clock_factor_;
   InputRejections rejections_;  // has its own lock: the input thread rejects without mutex_
 
   tf2_ros::Buffer tf_buffer_;
@@ -165,7 +197,9 @@ class ClothRos {
 
   // Before the bodies: their subscribers detach from it when they are destroyed.
   ros::CallbackQueue input_queue_;
-  std::vector<Body> bodies_;  // grippers, then obstacles; never resized after start-up
+  // Grippers, obstacles, then robot links with collision elements; never resized after start-up
+  // (callbacks hold references into it).
+  std::vector<Body> bodies_;
 
   ros::Publisher state_pub_;
   ros::Publisher markers_pub_;
