@@ -38,24 +38,41 @@ void ClothDiagnostics::simulationStatus(diagnostic_updater::DiagnosticStatusWrap
   const bool slow_rate =
       health_.real_time_factor_valid && health_.real_time_factor < config_.min_real_time_factor;
   const bool slow_steps = mean_step > health_.step_period;
+  const bool slow_clock =
+      health_.clock_factor_valid && health_.clock_factor < config_.min_real_time_factor;
   if (!health_.finite) {
     status.summary(DiagnosticStatus::ERROR,
                    "the simulation diverged (non-finite positions): ~state is not published; "
                    "call ~reset");
-  } else if (slow_rate || slow_steps) {
+  } else if (health_.time_source == TimeSource::kWallClock && (slow_rate || slow_steps)) {
     status.summaryf(DiagnosticStatus::WARN,
                     "cannot keep real time: real-time factor %.2f, a step takes %.1f ms for a "
                     "period of %.1f ms (lower step_rate, substeps or the cloth size)",
                     health_.real_time_factor, 1e3 * mean_step, 1e3 * health_.step_period);
+  } else if (health_.time_source == TimeSource::kRosClock && slow_clock) {
+    // /clock may run at any speed: what matters is whether the steps keep up with it.
+    status.summaryf(DiagnosticStatus::WARN,
+                    "cannot keep up with /clock: %.2f simulated s per s of /clock (real-time "
+                    "factor %.2f, a step takes %.1f ms; lower step_rate, substeps or the cloth "
+                    "size, or slow /clock down)",
+                    health_.clock_factor, health_.real_time_factor, 1e3 * mean_step);
   } else if (health_.degenerate_constraints > 0) {
     status.summaryf(DiagnosticStatus::WARN,
                     "%d stretch constraint(s) skipped in the last step: their particles coincide",
                     health_.degenerate_constraints);
+  } else if (health_.time_source == TimeSource::kRosClock) {
+    status.summary(DiagnosticStatus::OK, "keeping up with /clock");
+  } else if (health_.time_source == TimeSource::kOwnClock) {
+    status.summaryf(DiagnosticStatus::OK, "publishing /clock (real-time factor %.2f)",
+                    health_.real_time_factor);
   } else {
     status.summary(DiagnosticStatus::OK, "keeping real time");
   }
   status.add("sim time (s)", health_.sim_time);
   status.add("real-time factor", health_.real_time_factor);
+  if (health_.time_source == TimeSource::kRosClock) {
+    status.add("simulated s per s of /clock", health_.clock_factor);
+  }
   status.add("steps since last report", step_count_);
   status.add("mean step time (ms)", 1e3 * mean_step);
   status.add("max step time (ms)", 1e3 * step_time_max_);

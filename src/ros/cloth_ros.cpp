@@ -2,9 +2,11 @@
 
 #include <algorithm>
 #include <cctype>
+#include <chrono>
 #include <sstream>
 
 #include <geometry_msgs/WrenchStamped.h>
+#include <rosgraph_msgs/Clock.h>
 #include <visualization_msgs/MarkerArray.h>
 #include <boost/make_shared.hpp>
 
@@ -12,6 +14,7 @@
 #include "pbd_cloth/metrics.h"
 #include "pbd_cloth/ros/ros_conversions.h"
 #include "pbd_cloth/ros/ros_params.h"
+#include "pbd_cloth/scene_assets.h"
 
 namespace pbd_cloth {
 namespace {
@@ -46,13 +49,22 @@ void logGrasp(const std::string& gripper, const GraspResult& result) {
 ClothRos::ClothRos(ros::NodeHandle nh, ros::NodeHandle nh_private)
     : nh_(nh), nh_private_(nh_private) {
   try {
-    sim_ = std::make_unique<Simulation>(readSceneParameters(nh_private_));
+    SceneConfig scene = readSceneParameters(nh_private_);
+    if (scene.robot.enabled && scene.robot.urdf_file.empty()) {
+      loadRobotDescription(scene);
+    }
+    sim_ = std::make_unique<Simulation>(scene);
     config_ = readNodeParameters(nh_private_);
   } catch (const ConfigError& error) {
     ROS_FATAL("Invalid parameter in %s: %s", nh_private_.getNamespace().c_str(), error.what());
     throw;
   }
   const SceneConfig& scene = sim_->scene();
+  for (const std::string& warning : scene.load_warnings) {
+    ROS_WARN("Scene: %s", warning.c_str());
+  }
+  step_clock_ = StepClock(StepClock::Config{1.0 / scene.step_rate, config_.max_catch_up_steps});
+  publish_ticks_ = PublishTicks(scene.publish_rate);
   ROS_INFO(
       "Cloth %dx%d (%d particles, %d triangles), %s with %d substeps, stepping at %.0f Hz, "
       "publishing at %.0f Hz in frame '%s'.",
@@ -81,38 +93,113 @@ ClothRos::ClothRos(ros::NodeHandle nh, ros::NodeHandle nh_private)
   diagnostics_ = std::make_unique<ClothDiagnostics>(nh_, nh_private_, nh_private_.getNamespace(),
                                                     config_.diagnostics);
 
-  // roscpp never queues missed timer ticks: when a step overruns its period the next one simply
-  // starts later, and each step advances the simulation by the same 1/step_rate, so the simulation
-  // slows down (real-time factor < 1, reported in ~state and the diagnostics) instead of trying to
-  // catch up.
-  step_timer_ =
-      nh_.createWallTimer(ros::WallDuration(1.0 / scene.step_rate), &ClothRos::stepCallback, this);
-  publish_timer_ = nh_.createWallTimer(ros::WallDuration(1.0 / scene.publish_rate),
-                                       &ClothRos::publishCallback, this);
   diagnostics_timer_ = nh_.createWallTimer(ros::WallDuration(diagnostics_->period()),
                                            &ClothRos::diagnosticsCallback, this);
   input_spinner_ = std::make_unique<ros::AsyncSpinner>(1, &input_queue_);
   input_spinner_->start();
+
+  if (config_.publish_clock) {
+    // The node is the clock: simulated time 0 is ROS time 0, so /clock starts at 0 on every run
+    // and a recording made this way has the same stamps each time.
+    // A queue of 100: at thousands of steps per second a follower's connection may lag a little.
+    clock_pub_ = nh_.advertise<rosgraph_msgs::Clock>("/clock", 100);
+    if (config_.max_real_time_factor > 0.0) {
+      ROS_INFO("Publishing /clock from 0, at most %g simulated seconds per wall second.",
+               config_.max_real_time_factor);
+    } else {
+      ROS_INFO("Publishing /clock from 0, stepping as fast as the machine allows.");
+    }
+    clock_running_ = true;
+    clock_thread_ = std::thread(&ClothRos::clockLoop, this);
+  } else {
+    // Polled at twice the step rate: a step runs at most half a period after ROS time reached its
+    // end. ROS time itself (/clock) is not a timer source here, since a ros::Timer on a clock that
+    // jumps back or stops would stall rather than tell the node.
+    if (ros::Time::isSimTime()) {
+      ROS_INFO("/use_sim_time is true: stepping on /clock.");
+    }
+    step_timer_ = nh_.createWallTimer(ros::WallDuration(0.5 / scene.step_rate),
+                                      &ClothRos::stepCallback, this);
+  }
 }
 
 ClothRos::~ClothRos() {
-  // Before any member goes: a pose callback in flight uses the simulation and the tf buffer.
+  // Before any member goes: the clock thread and a pose callback in flight use the simulation,
+  // the publishers and the tf buffer.
+  clock_running_ = false;
+  if (clock_thread_.joinable()) {
+    clock_thread_.join();
+  }
   input_spinner_->stop();
+}
+
+const char* ClothRos::kindName(BodyKind kind) {
+  switch (kind) {
+    case BodyKind::kGripper:
+      return "gripper";
+    case BodyKind::kObstacle:
+      return "obstacle";
+    case BodyKind::kRobotLink:
+      return "robot link";
+  }
+  return "body";
+}
+
+void ClothRos::loadRobotDescription(SceneConfig& scene) const {
+  // Resolved like any ROS name (robot_state_publisher's way): "robot_description" in the node's
+  // namespace, so a robot in a namespace brings its own.
+  const std::string parameter = nh_.resolveName(scene.robot.description);
+  XmlRpc::XmlRpcValue value;
+  if (!nh_.getParam(parameter, value)) {
+    throw ConfigError("robot.description",
+                      "no parameter '" + parameter +
+                          "' with the robot's URDF (load it as robot_state_publisher needs it, "
+                          "e.g. <param name=\"robot_description\" textfile=\"...urdf\"/>, or "
+                          "give robot.urdf_file)");
+  }
+  if (value.getType() != XmlRpc::XmlRpcValue::TypeString) {
+    throw ConfigError("robot.description",
+                      "parameter '" + parameter + "' is not a string (it must hold the URDF text)");
+  }
+  loadRobot(scene, static_cast<std::string>(value), "parameter '" + parameter + "'");
+  ROS_INFO("Robot '%s' from parameter '%s': %zu links.", scene.robot.model.name.c_str(),
+           parameter.c_str(), scene.robot.model.links.size());
 }
 
 void ClothRos::createBodies() {
   ros::NodeHandle input_nh(nh_private_);
   input_nh.setCallbackQueue(&input_queue_);
-  bodies_.resize(sim_->gripperCount() + sim_->obstacleCount());
+  const int grippers = sim_->gripperCount();
+  const int obstacles = sim_->obstacleCount();
+  std::vector<int> links;
+  for (int l = 0; l < sim_->robotLinkCount(); ++l) {
+    if (sim_->robotLinkHasCollision(l)) links.push_back(l);
+  }
+  bodies_.resize(grippers + obstacles + links.size());
   for (std::size_t k = 0; k < bodies_.size(); ++k) {
     Body& body = bodies_[k];
-    body.is_gripper = static_cast<int>(k) < sim_->gripperCount();
-    body.index = body.is_gripper ? static_cast<int>(k) : static_cast<int>(k) - sim_->gripperCount();
-    body.name = body.is_gripper ? sim_->gripperName(body.index) : sim_->obstacle(body.index).name;
+    const int i = static_cast<int>(k);
     body.follower = PoseFollower(config_.follower);
-    body.pose_topic = nh_private_.resolveName(body.name + "/pose");
-    if (body.is_gripper) {
+    if (i < grippers) {
+      body.kind = BodyKind::kGripper;
+      body.index = i;
+      body.name = sim_->gripperName(body.index);
       body.tf_frame = sim_->scene().grippers[body.index].tf_frame;
+    } else if (i < grippers + obstacles) {
+      body.kind = BodyKind::kObstacle;
+      body.index = i - grippers;
+      body.name = sim_->obstacle(body.index).name;
+      body.tf_frame = sim_->scene().obstacles[body.index].tf_frame;
+    } else {
+      // robot_state_publisher names each link's frame after the link.
+      body.kind = BodyKind::kRobotLink;
+      body.index = links[i - grippers - obstacles];
+      body.name = sim_->robotLinkName(body.index);
+      body.tf_frame = body.name;
+      continue;
+    }
+    body.pose_topic = nh_private_.resolveName(body.name + "/pose");
+    if (body.kind == BodyKind::kGripper) {
       body.grasp_service =
           nh_private_.advertiseService<std_srvs::SetBool::Request, std_srvs::SetBool::Response>(
               body.name + "/grasp", [this, &body](std_srvs::SetBool::Request& request,
@@ -123,9 +210,9 @@ void ClothRos::createBodies() {
           nh_private_.advertise<geometry_msgs::WrenchStamped>(body.name + "/wrench", 1);
     }
     if (!body.tf_frame.empty()) {
-      // One source per gripper: a pose topic beside a followed frame would fight over it.
-      ROS_INFO("Gripper '%s' follows tf frame '%s' (%s is not subscribed).", body.name.c_str(),
-               body.tf_frame.c_str(), body.pose_topic.c_str());
+      // One source per body: a pose topic beside a followed frame would fight over it.
+      ROS_INFO("%s '%s' follows tf frame '%s' (%s is not subscribed).", kindName(body.kind),
+               body.name.c_str(), body.tf_frame.c_str(), body.pose_topic.c_str());
       continue;
     }
     // Every message is kept (up to 10) rather than only the latest, so each one is checked: an
@@ -134,10 +221,24 @@ void ClothRos::createBodies() {
         body.name + "/pose", 10,
         [this, &body](const geometry_msgs::PoseStampedConstPtr& msg) { poseCallback(body, *msg); });
   }
+  if (!links.empty()) {
+    ROS_INFO(
+        "%zu robot links with collision elements follow their tf frames in '%s' (posed by "
+        "robot.joint_trajectory until their tf arrives).",
+        links.size(), sim_->scene().frame_id.c_str());
+  }
 }
 
 Pose ClothRos::currentPose(const Body& body) const {
-  return body.is_gripper ? sim_->gripperPose(body.index) : sim_->obstacle(body.index).pose;
+  switch (body.kind) {
+    case BodyKind::kGripper:
+      return sim_->gripperPose(body.index);
+    case BodyKind::kObstacle:
+      return sim_->obstacle(body.index).pose;
+    case BodyKind::kRobotLink:
+      break;
+  }
+  return sim_->robotLinkPose(body.index);
 }
 
 void ClothRos::poseCallback(Body& body, const geometry_msgs::PoseStamped& msg) {
@@ -164,12 +265,17 @@ void ClothRos::poseCallback(Body& body, const geometry_msgs::PoseStamped& msg) {
   if (!stamp.isZero()) {
     body.last_stamp = stamp;
   }
-  body.follower.addSample(currentPose(body), pose, ros::WallTime::now().toSec());
+  body.follower.addSample(currentPose(body), pose, inputTime());
 }
 
-// Grippers that follow a tf frame take its latest transform every step; each new stamp is a sample
+double ClothRos::inputTime() const {
+  return config_.publish_clock ? stateTime().toSec() : ros::Time::now().toSec();
+}
+
+// Bodies that follow a tf frame take its latest transform every step; each new stamp is a sample
 // for the follower, exactly like a pose message.
-void ClothRos::pollTfFrames() {
+void ClothRos::pollTfFrames(double arrival) {
+  std::string waiting;  // bodies whose frame has never been seen, for one warning
   for (Body& body : bodies_) {
     if (body.tf_frame.empty()) {
       continue;
@@ -177,26 +283,74 @@ void ClothRos::pollTfFrames() {
     Pose pose;
     ros::Time stamp;
     PoseTransformer::Failure failure;
-    if (!pose_transformer_->lookupFrame(body.tf_frame, pose, stamp, failure)) {
-      if (body.tf_seen && body.tf_ok) {
+    bool found = pose_transformer_->lookupFrame(body.tf_frame, pose, stamp, failure);
+    // The latest transform of a frame whose broadcaster stopped stays in the buffer (10 s): for a
+    // link that would be a ghost standing in the cloth. Stamp 0 is a static transform.
+    if (found && body.kind == BodyKind::kRobotLink && !stamp.isZero() &&
+        arrival - stamp.toSec() > config_.robot_tf_timeout) {
+      std::ostringstream detail;
+      detail << "newest transform is " << arrival - stamp.toSec() << " s old (~robot_tf_timeout "
+             << config_.robot_tf_timeout << " s)";
+      failure = {RejectReason::kTfFailure, detail.str()};
+      found = false;
+    }
+    if (!found) {
+      if (body.kind == BodyKind::kRobotLink && body.tf_seen) {
+        loseRobotLink(body, failure);
+      } else if (body.tf_seen && body.tf_ok) {
         // Counted once per outage, not once per step of it.
-        rejections_.reject("tf frame '" + body.tf_frame + "' (gripper " + body.name + ")",
-                           failure.reason, failure.detail);
+        rejections_.reject(
+            "tf frame '" + body.tf_frame + "' (" + kindName(body.kind) + " " + body.name + ")",
+            failure.reason, failure.detail);
       } else if (!body.tf_seen) {
         // Not yet a rejected input: the broadcaster may simply start after this node.
-        ROS_WARN_THROTTLE(10.0, "Waiting for tf frame '%s' for gripper '%s': %s",
-                          body.tf_frame.c_str(), body.name.c_str(), failure.detail.c_str());
+        waiting += (waiting.empty() ? "" : ", ") + std::string(kindName(body.kind)) + " '" +
+                   body.name + "' (frame '" + body.tf_frame + "': " + failure.detail + ")";
       }
       body.tf_ok = false;
       continue;
     }
-    body.tf_seen = body.tf_ok = true;
-    // A static frame keeps stamp 0: it becomes a sample once, then the gripper stays there.
-    if (!body.follower.active() || stamp != body.last_stamp) {
-      body.last_stamp = stamp;
-      body.follower.addSample(currentPose(body), pose, ros::WallTime::now().toSec());
+    if (body.kind == BodyKind::kRobotLink && (!body.link_enabled || !body.follower.active())) {
+      placeRobotLink(body, pose, arrival);
+    } else if (!body.follower.active() || stamp != body.last_stamp) {
+      // A static frame keeps stamp 0: it becomes a sample once, then the body stays there.
+      body.follower.addSample(currentPose(body), pose, arrival);
     }
+    body.last_stamp = stamp;
+    body.tf_seen = body.tf_ok = true;
   }
+  if (!waiting.empty()) {
+    ROS_WARN_THROTTLE(10.0, "Waiting for tf of %s.", waiting.c_str());
+  }
+}
+
+void ClothRos::loseRobotLink(Body& body, const PoseTransformer::Failure& failure) {
+  if (body.link_enabled) {
+    sim_->setRobotLinkEnabled(body.index, false);
+    body.link_enabled = false;
+  }
+  if (body.tf_ok) {
+    // Counted (and warned about, throttled per link) once per outage.
+    rejections_.reject("tf frame '" + body.tf_frame + "' (robot link " + body.name + ")",
+                       failure.reason,
+                       failure.detail +
+                           "; the link is left out of the collisions until its tf "
+                           "returns");
+  }
+}
+
+void ClothRos::placeRobotLink(Body& body, const Pose& pose, double arrival) {
+  // Placed, not swept: where the link was (the scripted pose, or where its tf was lost) is not a
+  // place it really moved from, and sweeping from there would push the cloth for nothing.
+  sim_->setRobotLinkEnabled(body.index, false);
+  sim_->setRobotLinkPose(body.index, pose);
+  sim_->setRobotLinkEnabled(body.index, true);
+  body.follower.reset();
+  body.follower.addSample(pose, pose, arrival);
+  if (!body.link_enabled) {
+    ROS_INFO("Robot link '%s': its tf frame is back; it collides again.", body.name.c_str());
+  }
+  body.link_enabled = true;
 }
 
 // Bodies that have received a pose are moved to where their follower puts them at the end of the
@@ -208,21 +362,106 @@ void ClothRos::driveBodies(double step_end) {
       continue;
     }
     const Pose pose = body.follower.poseAt(step_end);
-    if (body.is_gripper) {
-      sim_->setGripperPose(body.index, pose);
-    } else {
-      sim_->setObstaclePose(body.index, pose);
+    switch (body.kind) {
+      case BodyKind::kGripper:
+        sim_->setGripperPose(body.index, pose);
+        break;
+      case BodyKind::kObstacle:
+        sim_->setObstaclePose(body.index, pose);
+        break;
+      case BodyKind::kRobotLink:
+        sim_->setRobotLinkPose(body.index, pose);
+        break;
     }
   }
 }
 
 void ClothRos::stepCallback(const ros::WallTimerEvent& /*event*/) {
   std::lock_guard<std::mutex> lock(mutex_);
+  const ros::Time now = ros::Time::now();
+  const StepClock::Plan plan = step_clock_.update(now, sim_->time());
+  if (plan.waiting) {
+    if (!waiting_for_clock_) {
+      ROS_INFO("/use_sim_time is true and no /clock has arrived yet: waiting for /clock to step.");
+      waiting_for_clock_ = true;
+    }
+    return;
+  }
+  if (waiting_for_clock_) {
+    ROS_INFO("/clock arrived (%.3f s): stepping.", now.toSec());
+    waiting_for_clock_ = false;
+  }
+  if (plan.jumped_back) {
+    std::ostringstream detail;
+    detail << "ROS time went back by " << plan.jump << " s to " << now
+           << " (a looping bag or a restarted simulator?)";
+    rejections_.reject("/clock", RejectReason::kClockJump, detail.str());
+    resetSimulation(now);
+    return;
+  }
+  if (plan.skipped > 0.0) {
+    ROS_WARN_THROTTLE(10.0,
+                      "The simulation was %.3f s (%.0f steps) behind ROS time: it runs %d steps "
+                      "(~max_catch_up_steps) and skips the other %.3f s of ROS time. Either /clock "
+                      "jumped ahead or the machine cannot step at step_rate (real-time factor "
+                      "%.2f).",
+                      plan.behind, plan.behind * sim_->scene().step_rate, plan.steps, plan.skipped,
+                      real_time_factor_.value());
+  }
+  // The steps due, within one step period of wall time: what is left over is still due at the
+  // next call, and in between services and the reconfigure get their turn.
   const double period = 1.0 / sim_->scene().step_rate;
-  pollTfFrames();
-  driveBodies(ros::WallTime::now().toSec() + period);
+  const ros::WallTime start = ros::WallTime::now();
+  for (int k = 0; k < plan.steps; ++k) {
+    if (k > 0 && (ros::WallTime::now() - start).toSec() > period) break;
+    stepOnce();
+  }
+}
+
+void ClothRos::clockLoop() {
+  using Clock = std::chrono::steady_clock;
+  // Pacing for max_real_time_factor: the wall time each state is due at, counted from an anchor.
+  // After a stall (a long service call) the anchor moves, so the node does not race to make up.
+  Clock::time_point anchor_wall = Clock::now();
+  double anchor_time = 0.0;
+  while (clock_running_ && ros::ok()) {
+    double state_time = 0.0;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stepOnce();
+      const ros::Time now = stateTime();
+      state_time = now.toSec();
+      rosgraph_msgs::Clock clock;
+      clock.clock = now;
+      clock_pub_.publish(clock);
+    }
+    if (config_.max_real_time_factor <= 0.0) {
+      // Lets a service or reconfigure waiting for the mutex in.
+      std::this_thread::yield();
+      continue;
+    }
+    const Clock::time_point due =
+        anchor_wall + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(
+                          (state_time - anchor_time) / config_.max_real_time_factor));
+    const Clock::time_point now = Clock::now();
+    if (due > now) {
+      std::this_thread::sleep_until(due);
+    } else if (now - due > std::chrono::milliseconds(100)) {
+      anchor_wall = now;
+      anchor_time = state_time;
+    }
+  }
+}
+
+void ClothRos::stepOnce() {
+  const double period = 1.0 / sim_->scene().step_rate;
+  pollTfFrames(inputTime());
+  driveBodies(step_clock_.stateTime(sim_->time() + period).toSec());
   sim_->step();
   real_time_factor_.add(ros::WallTime::now().toSec(), sim_->time());
+  if (!config_.publish_clock) {
+    clock_factor_.add(ros::Time::now().toSec(), sim_->time());
+  }
   diagnostics_->addStep(sim_->stats().step_wall_time);
   warnAboutDegenerateConstraints();
 
@@ -232,6 +471,9 @@ void ClothRos::stepCallback(const ros::WallTimerEvent& /*event*/) {
                       "runs slower than real time (factor %.2f). Lower step_rate, "
                       "solver.substeps or the cloth size.",
                       1e3 * sim_->stats().step_wall_time, 1e3 * period, real_time_factor_.value());
+  }
+  if (publish_ticks_.due(sim_->time())) {
+    publishOutputs();
   }
 }
 
@@ -248,8 +490,7 @@ void ClothRos::warnAboutDegenerateConstraints() {
                     stats.degenerate_constraints, stats.first_degenerate_constraint, con.i, con.j);
 }
 
-void ClothRos::publishCallback(const ros::WallTimerEvent& /*event*/) {
-  std::lock_guard<std::mutex> lock(mutex_);
+void ClothRos::publishOutputs() {
   if (!allFinite(sim_->particles())) {
     // Publishing would hand NaNs to every consumer; the diagnostics report the error too.
     ROS_ERROR_THROTTLE(5.0,
@@ -274,6 +515,13 @@ void ClothRos::diagnosticsCallback(const ros::WallTimerEvent& /*event*/) {
   health.real_time_factor = real_time_factor_.value();
   // Half a window: enough wall time that one late timer tick does not decide the verdict.
   health.real_time_factor_valid = real_time_factor_.span() >= 0.5;
+  if (config_.publish_clock) {
+    health.time_source = TimeSource::kOwnClock;
+  } else if (ros::Time::isSimTime()) {
+    health.time_source = TimeSource::kRosClock;
+    health.clock_factor = clock_factor_.value();
+    health.clock_factor_valid = clock_factor_.span() >= 0.5;
+  }
   health.substeps = static_cast<int>(stats.substeps);
   health.iterations = static_cast<int>(stats.iterations);
   health.max_strain = stats.max_strain;
@@ -286,19 +534,31 @@ void ClothRos::diagnosticsCallback(const ros::WallTimerEvent& /*event*/) {
 bool ClothRos::resetCallback(std_srvs::Trigger::Request& /*request*/,
                              std_srvs::Trigger::Response& response) {
   std::lock_guard<std::mutex> lock(mutex_);
+  // As the clock, the node keeps its time going forward (whoever follows /clock would see it jump
+  // back); otherwise simulated time 0 is now.
+  resetSimulation(config_.publish_clock ? stateTime() : ros::Time::now());
+  response.success = true;
+  response.message = "back to the initial state";
+  return true;
+}
+
+void ClothRos::resetSimulation(const ros::Time& origin) {
   sim_->reset();
+  step_clock_.restart(origin);
+  publish_ticks_.restart();
   // Grippers and obstacles are back at their scene poses: the next pose (or tf stamp) starts
   // afresh from there, and a replayed stream with earlier stamps is not out of order.
   for (Body& body : bodies_) {
     body.follower.reset();
     body.last_stamp = ros::Time();
+    // The simulation starts with every link enabled; the next poll leaves out those without tf.
+    body.link_enabled = true;
   }
-  real_time_factor_.clear();  // simulated time jumps back: old samples would give a negative rate
+  // Simulated time jumps back: old samples would give a negative rate.
+  real_time_factor_.clear();
+  clock_factor_.clear();
   // Publish the initial state at once, so a client sees it before the next step moves it.
   publishState();
-  response.success = true;
-  response.message = "back to the initial state";
-  return true;
 }
 
 bool ClothRos::graspCallback(const Body& body, std_srvs::SetBool::Request& request,
@@ -358,7 +618,7 @@ void ClothRos::publishState() {
   // A fresh message each time: a nodelet subscriber may still hold the previous one.
   const ClothStatePtr msg = boost::make_shared<ClothState>();
   msg->header.frame_id = sim_->scene().frame_id;
-  msg->header.stamp = ros::Time::now();
+  msg->header.stamp = stateTime();
   RosConversions::toStateMessage(*sim_, *msg);
   msg->stats.real_time_factor = real_time_factor_.value();
   msg->stats.rejected_inputs = rejections_.total();
@@ -372,7 +632,7 @@ void ClothRos::publishMarkers() {
   }
   std_msgs::Header header;
   header.frame_id = sim_->scene().frame_id;
-  header.stamp = ros::Time::now();
+  header.stamp = stateTime();
   const auto msg = boost::make_shared<visualization_msgs::MarkerArray>();
   RosConversions::toMarkerArray(*sim_, header, *msg);
   markers_pub_.publish(msg);
@@ -380,12 +640,12 @@ void ClothRos::publishMarkers() {
 
 void ClothRos::publishWrenches() {
   for (const Body& body : bodies_) {
-    if (!body.is_gripper || body.wrench_publisher.getNumSubscribers() == 0) {
+    if (body.kind != BodyKind::kGripper || body.wrench_publisher.getNumSubscribers() == 0) {
       continue;
     }
     const auto msg = boost::make_shared<geometry_msgs::WrenchStamped>();
     msg->header.frame_id = sim_->scene().frame_id;
-    msg->header.stamp = ros::Time::now();
+    msg->header.stamp = stateTime();
     // The force the grasped particles' constraints pull on the gripper, in the scene frame. The
     // core reports no torque, so it stays zero.
     msg->wrench.force = RosConversions::toVector3(sim_->gripperForce(body.index));

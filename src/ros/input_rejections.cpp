@@ -21,9 +21,22 @@ const char* toString(RejectReason reason) {
       return "unknown gripper";
     case RejectReason::kBadValue:
       return "invalid value";
+    case RejectReason::kClockJump:
+      return "clock went back";
   }
   return "unknown reason";
 }
+
+namespace {
+
+// What the node does about a rejected input, for the warning.
+const char* consequence(RejectReason reason) {
+  return reason == RejectReason::kClockJump
+             ? "the simulation restarts from its initial state at the new time"
+             : "the simulation goes on with the last good input";
+}
+
+}  // namespace
 
 void InputRejections::reject(const std::string& topic, RejectReason reason,
                              const std::string& detail) {
@@ -39,13 +52,12 @@ void InputRejections::reject(const std::string& topic, RejectReason reason,
     return;
   }
   if (throttle.suppressed > 0) {
-    ROS_WARN(
-        "Rejected input on %s (%s): %s (and %u more like it since the last warning); the "
-        "simulation goes on with the last good input.",
-        topic.c_str(), toString(reason), detail.c_str(), throttle.suppressed);
+    ROS_WARN("Rejected input on %s (%s): %s (and %u more like it since the last warning); %s.",
+             topic.c_str(), toString(reason), detail.c_str(), throttle.suppressed,
+             consequence(reason));
   } else {
-    ROS_WARN("Rejected input on %s (%s): %s; the simulation goes on with the last good input.",
-             topic.c_str(), toString(reason), detail.c_str());
+    ROS_WARN("Rejected input on %s (%s): %s; %s.", topic.c_str(), toString(reason), detail.c_str(),
+             consequence(reason));
   }
   throttle.last_warning = now;
   throttle.suppressed = 0;

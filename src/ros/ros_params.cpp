@@ -72,23 +72,74 @@ SceneConfig readSceneParameters(const ros::NodeHandle& nh_private) {
 
 ClothRos::Config readNodeParameters(const ros::NodeHandle& nh_private) {
   ClothRos::Config config;
+  // A parameter of the wrong type (a string where a number belongs) is an error too, not a
+  // silent default: the user meant to set something.
+  const auto present = [&nh_private](const std::string& key, XmlRpc::XmlRpcValue& value) {
+    return nh_private.getParam(key, value);
+  };
   // `low` is allowed when `low_allowed`; every value must be finite.
-  const auto read = [&nh_private](const std::string& key, double& value, double low,
-                                  bool low_allowed) {
-    if (!nh_private.getParam(key, value)) {
+  const auto read = [&](const std::string& key, double& value, double low, bool low_allowed) {
+    XmlRpc::XmlRpcValue raw;
+    if (!present(key, raw)) {
       return;
     }
-    if (!std::isfinite(value) || value < low || (!low_allowed && value == low)) {
-      std::ostringstream message;
-      message << "must be a finite number " << (low_allowed ? ">= " : "> ") << low << ", got "
-              << value;
+    std::ostringstream message;
+    message << "must be a finite number " << (low_allowed ? ">= " : "> ") << low << ", got ";
+    if (raw.getType() == XmlRpc::XmlRpcValue::TypeInt) {
+      value = static_cast<int>(raw);
+    } else if (raw.getType() == XmlRpc::XmlRpcValue::TypeDouble) {
+      value = static_cast<double>(raw);
+    } else {
+      message << "a value that is not a number";
       throw ConfigError(key, message.str());
     }
+    if (!std::isfinite(value) || value < low || (!low_allowed && value == low)) {
+      message << value;
+      throw ConfigError(key, message.str());
+    }
+  };
+  const auto readInt = [&](const std::string& key, int& value, int low, int high) {
+    XmlRpc::XmlRpcValue raw;
+    if (!present(key, raw)) {
+      return;
+    }
+    std::ostringstream message;
+    message << "must be an integer in [" << low << ", " << high << "], got ";
+    if (raw.getType() != XmlRpc::XmlRpcValue::TypeInt) {
+      message << "a value that is not an integer";
+      throw ConfigError(key, message.str());
+    }
+    value = static_cast<int>(raw);
+    if (value < low || value > high) {
+      message << value;
+      throw ConfigError(key, message.str());
+    }
+  };
+  const auto readBool = [&](const std::string& key, bool& value) {
+    XmlRpc::XmlRpcValue raw;
+    if (!present(key, raw)) {
+      return;
+    }
+    if (raw.getType() != XmlRpc::XmlRpcValue::TypeBoolean) {
+      throw ConfigError(key, "must be true or false");
+    }
+    value = static_cast<bool>(raw);
   };
   read("tf_timeout", config.tf_timeout, 0.0, true);
   read("pose_period", config.follower.default_period, 0.0, false);
   read("max_pose_period", config.follower.max_period, 0.0, false);
   read("min_real_time_factor", config.diagnostics.min_real_time_factor, 0.0, true);
+  // An upper bound keeps a typo (10000) from stalling the callback queue for seconds of catch-up.
+  readInt("max_catch_up_steps", config.max_catch_up_steps, 1, 1000);
+  readBool("publish_clock", config.publish_clock);
+  read("max_real_time_factor", config.max_real_time_factor, 0.0, true);
+  read("robot_tf_timeout", config.robot_tf_timeout, 0.0, false);
+  if (config.max_real_time_factor > 0.0 && !config.publish_clock) {
+    ROS_WARN(
+        "%s is %g but %s is false: the limit applies only when the node is the clock; ignored.",
+        nh_private.resolveName("max_real_time_factor").c_str(), config.max_real_time_factor,
+        nh_private.resolveName("publish_clock").c_str());
+  }
   return config;
 }
 

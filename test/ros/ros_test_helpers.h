@@ -66,9 +66,21 @@ inline geometry_msgs::PoseStamped poseStamped(const std::string& frame,
 template <typename Message>
 class Recorder {
  public:
-  explicit Recorder(const std::string& topic) {
+  // `queue_size`: messages kept while the spinner is busy (raise it for /clock at thousands of
+  // messages per second).
+  explicit Recorder(const std::string& topic, uint32_t queue_size = 100) {
     ros::NodeHandle nh;
-    subscriber_ = nh.subscribe(topic, 100, &Recorder::callback, this);
+    subscriber_ = nh.subscribe(topic, queue_size, &Recorder::callback, this);
+  }
+
+  // True once a publisher of the topic is connected (nothing it sent before was lost).
+  bool waitForPublisher(double timeout = 10.0) {
+    const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(timeout);
+    while (ros::ok() && subscriber_.getNumPublishers() == 0) {
+      if (ros::WallTime::now() > deadline) return false;
+      ros::WallDuration(0.01).sleep();
+    }
+    return true;
   }
 
   // The first message that arrives after this call and satisfies `accept`, or false on timeout.

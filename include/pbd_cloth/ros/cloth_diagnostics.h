@@ -1,6 +1,8 @@
 // The node's diagnostics on /diagnostics (diagnostic_updater), two statuses named after the node:
 //   "<node>: simulation"  step time, real-time factor, solver figures; WARN when the node cannot
-//                         keep real time, ERROR when the state is no longer finite;
+//                         keep real time (under /use_sim_time: cannot keep up with /clock; as
+//                         the clock, ~publish_clock: never), ERROR when the state is no longer
+//                         finite;
 //   "<node>: inputs"      rejected inputs, total and by reason, and the latest one; WARN when some
 //                         were rejected since the previous report.
 #pragma once
@@ -15,8 +17,20 @@
 
 namespace pbd_cloth {
 
+// What the simulated time follows, for the "keeps up" verdict.
+enum class TimeSource {
+  kWallClock,  // ROS time is the wall clock: the node must keep real time
+  kRosClock,   // /use_sim_time: the node must keep up with /clock, whatever its speed
+  kOwnClock,   // ~publish_clock: the node is the clock and cannot fall behind it
+};
+
 // What the simulation status reports, taken from the simulation at report time.
 struct SimulationHealth {
+  TimeSource time_source = TimeSource::kWallClock;
+  // kRosClock: simulated s per s of /clock over the last second of it; below 1 the node falls
+  // behind /clock (and skips ahead, step_clock.h).
+  double clock_factor = 0.0;
+  bool clock_factor_valid = false;
   double sim_time = 0.0;                // s
   double step_period = 0.0;             // s, 1 / step_rate
   double real_time_factor = 0.0;        // simulated s per wall s

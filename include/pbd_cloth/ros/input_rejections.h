@@ -22,6 +22,7 @@ enum class RejectReason {
   kTfFailure,       // the frame exists but no transform arrived within the timeout
   kUnknownGripper,  // ~grasp_by_name names a gripper the scene does not have
   kBadValue,        // a value that cannot be parsed or that the scene validation refuses
+  kClockJump,       // ROS time (/clock) went back, e.g. a looping rosbag: the node reset itself
 };
 
 const char* toString(RejectReason reason);

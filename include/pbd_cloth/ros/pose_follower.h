@@ -9,7 +9,10 @@
 // and a late correction would then yank the cloth back. Samples faster than the steps simply make
 // each step go to the latest pose. The core interpolates each step's motion across its substeps.
 //
-// ROS-free (wall times are plain seconds), so the policy is testable without a master.
+// Times are ROS time (the node passes ros::Time::now(), /clock under /use_sim_time) as plain
+// seconds, and the node asks for the pose at the simulated time of each step's end: a gripper then
+// moves as fast in simulated time as it does in the world, whatever the real-time factor.
+// ROS-free, so the policy is testable without a master.
 #pragma once
 
 #include "pbd_cloth/scene_config.h"
@@ -31,11 +34,11 @@ class PoseFollower {
   PoseFollower() = default;
   explicit PoseFollower(const Config& config) : config_(config) {}
 
-  // A new commanded pose arrived at wall time `now` (s); `current` is where the body is now.
+  // A new commanded pose arrived at ROS time `now` (s); `current` is where the body is now.
   void addSample(const Pose& current, const Pose& target, double now);
   // True once a sample has arrived (since construction or reset): the body is driven by samples.
   bool active() const { return active_; }
-  // The pose to reach at wall time `time` (s): on the way from the pose at the last sample to the
+  // The pose to reach at ROS time `time` (s): on the way from the pose at the last sample to the
   // sample, or the sample itself once the expected period has passed.
   Pose poseAt(double time) const;
   // The estimated sample period (s).
@@ -47,7 +50,7 @@ class PoseFollower {
   Config config_;
   bool active_ = false;
   bool have_period_ = false;
-  double last_arrival_ = 0.0;  // wall time of the last sample (s)
+  double last_arrival_ = 0.0;  // ROS time of the last sample (s)
   double period_ = Config().default_period;
   Pose start_;   // where the body was when the last sample arrived
   Pose target_;  // the last sample

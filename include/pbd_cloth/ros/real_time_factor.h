@@ -1,6 +1,7 @@
-// Simulated seconds per wall second over a sliding window. The step timer never queues missed
-// ticks: when a step overruns its period the simulation simply falls behind wall time, and this
-// ratio is how a user sees it (1.0 = real time).
+// Simulated seconds per wall second over a sliding window: how a user sees that the node cannot
+// keep up (below 1; the catch-up of step_clock.h is bounded, so a slow node falls behind) or, as
+// the clock (~publish_clock), how much faster than real time it runs. Always the wall clock, also
+// under /use_sim_time: it measures the machine, not the clock.
 #pragma once
 
 #include <deque>

@@ -29,7 +29,9 @@ YAML::Node sceneYamlFromParameters(const ros::NodeHandle& nh_private);
 SceneConfig readSceneParameters(const ros::NodeHandle& nh_private);
 
 // The node's own settings beside the scene (~tf_timeout, ~pose_period, ~max_pose_period,
-// ~min_real_time_factor); a missing key keeps its default, a bad one throws ConfigError.
+// ~min_real_time_factor, ~max_catch_up_steps, ~publish_clock, ~max_real_time_factor,
+// ~robot_tf_timeout); a missing
+// key keeps its default, a bad value or type throws ConfigError naming the key and its range.
 ClothRos::Config readNodeParameters(const ros::NodeHandle& nh_private);
 
 }  // namespace pbd_cloth

@@ -1,0 +1,131 @@
+// The node as the clock (~publish_clock: publish_clock.test without a limit,
+// publish_clock_limited.test with ~max_real_time_factor), on the small scene:
+// - /clock advances faster than wall time: more than ~min_speed_up simulated seconds per wall
+//   second over two wall seconds (and, with ~max_speed_up > 0, fewer than that);
+// - /clock starts at 0 and carries the states' times: ~state stamps equal stats.sim_time and each
+//   is one of the /clock values; /clock only goes forward;
+// - ~reset answers while the node runs free, and keeps /clock going forward: the reset state is
+//   stamped at the time of the reset, not 0.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <set>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <ros/ros.h>
+#include <rosgraph_msgs/Clock.h>
+
+#include "pbd_cloth/ClothState.h"
+#include "ros_test_helpers.h"
+
+namespace {
+
+using pbd_cloth::ClothState;
+using pbd_cloth_test::node;
+using pbd_cloth_test::Recorder;
+using pbd_cloth_test::StateRecorder;
+
+using ClockRecorder = Recorder<rosgraph_msgs::Clock>;
+
+// Thousands of /clock messages per second: a queue that holds several seconds of them.
+constexpr uint32_t kClockQueue = 100000;
+
+// Every stamp of `clocks` in nanoseconds, for exact look-ups.
+std::set<int64_t> clockValues(const std::vector<rosgraph_msgs::Clock>& clocks) {
+  std::set<int64_t> values;
+  for (const auto& c : clocks) values.insert(static_cast<int64_t>(c.clock.toNSec()));
+  return values;
+}
+
+// The states whose stamp lies within the recorded /clock values, and how many of them are one.
+void countStampsInClock(const std::vector<ClothState>& states,
+                        const std::vector<rosgraph_msgs::Clock>& clocks, int& within, int& found) {
+  within = found = 0;
+  if (clocks.empty()) return;
+  const std::set<int64_t> values = clockValues(clocks);
+  for (const ClothState& s : states) {
+    const int64_t stamp = static_cast<int64_t>(s.header.stamp.toNSec());
+    if (stamp < *values.begin() || stamp > *values.rbegin()) continue;
+    ++within;
+    if (values.count(stamp) > 0) ++found;
+  }
+}
+
+TEST(PublishClock, ClockRunsFasterThanWallTimeAndStampsAreItsValues) {
+  double min_speed_up = 1.5, max_speed_up = 0.0;
+  ros::NodeHandle("~").getParam("min_speed_up", min_speed_up);
+  ros::NodeHandle("~").getParam("max_speed_up", max_speed_up);
+  StateRecorder states(node() + "/state");
+  ClockRecorder clocks("/clock", kClockQueue);
+  ClothState first;
+  ASSERT_TRUE(states.waitForNext(first, 20.0)) << "no ~state";
+  ASSERT_TRUE(clocks.waitForPublisher());
+
+  const std::size_t state_from = states.count();
+  const std::size_t clock_from = clocks.count();
+  rosgraph_msgs::Clock c0, c1;
+  ASSERT_TRUE(clocks.waitForNext(c0, 5.0));
+  const ros::WallTime w0 = ros::WallTime::now();
+  ros::WallDuration(2.0).sleep();
+  ASSERT_TRUE(clocks.waitForNext(c1, 5.0));
+  const ros::WallTime w1 = ros::WallTime::now();
+  const double speed_up = (c1.clock - c0.clock).toSec() / (w1 - w0).toSec();
+  std::printf("/clock ran %.2f simulated s per wall s\n", speed_up);
+  EXPECT_GT(speed_up, min_speed_up) << "/clock does not run faster than wall time";
+  if (max_speed_up > 0.0) {
+    EXPECT_LT(speed_up, max_speed_up) << "/clock runs faster than ~max_real_time_factor";
+  }
+
+  const std::vector<ClothState> recorded = states.since(state_from);
+  const std::vector<rosgraph_msgs::Clock> clock_msgs = clocks.since(clock_from);
+  ASSERT_GE(recorded.size(), 10u);
+  ASSERT_GE(clock_msgs.size(), 10u);
+  for (std::size_t k = 1; k < clock_msgs.size(); ++k) {
+    ASSERT_GT(clock_msgs[k].clock, clock_msgs[k - 1].clock) << "/clock did not go forward";
+  }
+  for (const ClothState& s : recorded) {
+    // Origin 0: the stamp is the simulated time itself.
+    EXPECT_NEAR(s.header.stamp.toSec(), s.stats.sim_time, 1e-6);
+  }
+  int within = 0, found = 0;
+  countStampsInClock(recorded, clock_msgs, within, found);
+  std::printf("%d of %d ~state stamps found among %zu /clock values\n", found, within,
+              clock_msgs.size());
+  ASSERT_GE(within, 10);
+  // Each state's time is published on /clock right after it; the subscriber may lose a /clock
+  // message at thousands per second, so 99 % must match exactly.
+  EXPECT_GE(found, 0.99 * within) << "~state stamps are not /clock values";
+}
+
+TEST(PublishClock, ResetAnswersAndKeepsTheClockGoingForward) {
+  StateRecorder states(node() + "/state");
+  ClockRecorder clocks("/clock", kClockQueue);
+  ClothState before;
+  ASSERT_TRUE(states.waitForNext(before, 20.0));
+  ASSERT_TRUE(clocks.waitForPublisher());
+  const std::size_t clock_from = clocks.count();
+  const std::size_t state_from = states.count();
+  ASSERT_TRUE(pbd_cloth_test::callReset(node())) << "~reset did not answer";
+
+  ClothState reset;
+  ASSERT_TRUE(states.waitFrom(state_from, reset, 10.0, [](const ClothState& s) {
+    return s.stats.sim_time < 1e-9;
+  })) << "no reset state";
+  EXPECT_GT(reset.header.stamp, before.header.stamp) << "the reset took the clock back";
+  ClothState after;
+  ASSERT_TRUE(
+      states.waitForNext(after, 10.0, [](const ClothState& s) { return s.stats.sim_time > 0.5; }));
+  EXPECT_NEAR(after.header.stamp.toSec() - after.stats.sim_time, reset.header.stamp.toSec(), 1e-6);
+  const std::vector<rosgraph_msgs::Clock> clock_msgs = clocks.since(clock_from);
+  ASSERT_GE(clock_msgs.size(), 2u);
+  for (std::size_t k = 1; k < clock_msgs.size(); ++k) {
+    ASSERT_GT(clock_msgs[k].clock, clock_msgs[k - 1].clock) << "/clock went back at the reset";
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return pbd_cloth_test::runTests(argc, argv, "publish_clock_test");
+}
