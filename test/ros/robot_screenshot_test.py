@@ -32,15 +32,16 @@ class RobotScreenshotTest(ScreenshotCase):
         self.tf_listener = tf2_ros.TransformListener(self.tf_buffer)
 
     def arm_in_cloth(self):
-        """The wrist beyond the cloth's rest plane (y = 0 in config/robot_demo.yaml), between
-        its side edges (|x| < 0.2875): the forearm is pushing the cloth."""
+        """The wrist 4 cm beyond the cloth's rest plane (y = 0 in config/robot_demo.yaml; the
+        sweep takes it up to 6.6 cm and holds it at 4.7), between the cloth's side edges
+        (|x| < 0.2875): the forearm is deep in the cloth, pushing it."""
         try:
             wrist = self.tf_buffer.lookup_transform('world', 'wrist', rospy.Time(0))
         except (tf2_ros.LookupException, tf2_ros.ConnectivityException,
                 tf2_ros.ExtrapolationException):
             return False
         position = wrist.transform.translation
-        return position.y > 0.02 and abs(position.x) < 0.27
+        return position.y > 0.04 and abs(position.x) < 0.27
 
     def test_rviz_shows_the_arm_in_the_cloth(self):
         display = self.start_display()
@@ -59,7 +60,7 @@ class RobotScreenshotTest(ScreenshotCase):
         min_robot = rospy.get_param('~min_robot_pixels', 1500)
         min_cloth = rospy.get_param('~min_cloth_pixels', 2000)
         best_score, best = -1.0, None
-        deadline = time.time() + 3.0  # the arm stays in the cloth for about 4 s
+        deadline = time.time() + 3.0  # the wrist stays that deep for about 3 s
         while time.time() < deadline:
             ppm = self.grab(display)
             robot, cloth = count_pixels(ppm, is_robot, is_cloth)
