@@ -46,6 +46,7 @@
 #include "pbd_cloth/scene_config.h"
 #include "pbd_cloth/self_collision.h"
 #include "pbd_cloth/shapes.h"
+#include "pbd_cloth/sim_state.h"
 
 namespace pbd_cloth {
 
@@ -92,6 +93,18 @@ class Collisions {
   // Deepest violation of any contact constraint in the current positions (m): particle inside an
   // obstacle (radius minus distance), particle pair overlap, vertex closer than h to a triangle.
   double maxPenetration(const Particles& particles, const ClothTopology& topology) const;
+
+  // Saving and restoring a state (sim_state.h): a collider's pose, target and flags (the name is
+  // left to the caller), and the mesh colliders' per-contact search caches.
+  void getColliderState(int collider, BodySnapshot& body) const;
+  void setColliderState(int collider, const BodySnapshot& body);
+  void getMeshContacts(std::vector<MeshContactCache>& caches) const;
+  // Every cache as listed, the others as never queried (the caller checked the indices).
+  void setMeshContacts(const std::vector<MeshContactCache>& caches);
+  // After the particles were replaced by a saved state: the contact candidates of the new
+  // positions, as prepare() finds them, so maxPenetration() is right before the next step. The
+  // stamps keep counting up, so no contact state of before can pass for a current one.
+  void findCandidatesNow(const Particles& particles, const ClothTopology& topology);
 
   const CollisionStats& stats() const { return stats_; }
   // Largest speed at which pre-existing overlaps are separated (m/s), 1 by default.

@@ -10,6 +10,7 @@
 #include "pbd_cloth/metrics.h"
 #include "pbd_cloth/particles.h"
 #include "pbd_cloth/scene_config.h"
+#include "pbd_cloth/sim_state.h"
 #include "pbd_cloth/solver.h"
 
 namespace pbd_cloth {
@@ -88,6 +89,14 @@ class Simulation {
   void setClothCompliance(double stretch_compliance, double bend_compliance);
   void setFriction(const FrictionConfig& friction);
 
+  // Saving and restoring (sim_state.h). getState captures everything the next step needs;
+  // setState continues from a state got from a Simulation of the same scene, and the steps after
+  // it are bit for bit those that followed the saved state. A state that does not fit this scene
+  // (counts, names, indices, non-finite values) is refused: false, `reason` names the field and
+  // index, and nothing changes. Scene settings (live tuning included) stay as they are.
+  void getState(SimulationState& state) const;
+  bool setState(const SimulationState& state, std::string& reason);
+
   // Accuracy metrics of the current state (strain, penetration, self-intersections, energy).
   Metrics computeMetrics() const;
 
@@ -121,6 +130,8 @@ class Simulation {
   void updateKinematicTargets(double dt);
   void releaseGrasp(GripperState& gripper);
   void kinematicSetChanged();
+  // setState's check: empty when the state fits this scene, else what does not.
+  std::string checkState(const SimulationState& state) const;
 
   SceneConfig scene_;
   Particles particles_;

@@ -378,6 +378,55 @@ double Collisions::projectBounds(Particles& particles) const {
   return max_change;
 }
 
+void Collisions::getColliderState(int collider, BodySnapshot& body) const {
+  body.pose = obstacles_[collider].pose;
+  body.target = obstacle_targets_[collider];
+  body.enabled = enabled_[collider] != 0;
+  body.jump_to_target = teleport_[collider] != 0;
+}
+
+void Collisions::setColliderState(int collider, const BodySnapshot& body) {
+  obstacles_[collider].pose = body.pose;
+  obstacle_targets_[collider] = body.target;
+  enabled_[collider] = body.enabled ? 1 : 0;
+  teleport_[collider] = body.jump_to_target ? 1 : 0;
+}
+
+void Collisions::getMeshContacts(std::vector<MeshContactCache>& caches) const {
+  caches.clear();
+  const std::size_t count = obstacles_.size();
+  const double never = -std::numeric_limits<double>::infinity();
+  for (std::size_t slot = 0; slot < mesh_hint_.size(); ++slot) {
+    if (mesh_hint_[slot] == -1 && mesh_distance_[slot] == never) continue;  // never queried
+    MeshContactCache cache;
+    cache.particle = static_cast<int>(slot / count);
+    cache.collider = static_cast<int>(slot % count);
+    cache.triangle = mesh_hint_[slot];
+    cache.distance = mesh_distance_[slot];
+    cache.point = mesh_point_[slot];
+    caches.push_back(cache);
+  }
+}
+
+void Collisions::setMeshContacts(const std::vector<MeshContactCache>& caches) {
+  std::fill(mesh_hint_.begin(), mesh_hint_.end(), -1);
+  std::fill(mesh_distance_.begin(), mesh_distance_.end(), -std::numeric_limits<double>::infinity());
+  std::fill(mesh_point_.begin(), mesh_point_.end(), Vec3::Zero());
+  for (const MeshContactCache& cache : caches) {
+    const std::size_t slot =
+        static_cast<std::size_t>(cache.particle) * obstacles_.size() + cache.collider;
+    mesh_hint_[slot] = cache.triangle;
+    mesh_distance_[slot] = cache.distance;
+    mesh_point_[slot] = cache.point;
+  }
+}
+
+void Collisions::findCandidatesNow(const Particles& particles, const ClothTopology& topology) {
+  checked_substep_ = -1;
+  computeSweptBoxes(particles, 0.0);
+  findCandidates(particles, topology, true);
+}
+
 void Collisions::endStep() {
   for (std::size_t k = 0; k < obstacles_.size(); ++k) obstacles_[k].pose = obstacle_targets_[k];
 }

@@ -1,0 +1,312 @@
+// Saving and restoring the simulation state (sim_state.h): a run of 2 s equals, bit for bit, a run
+// of 1 s whose state is saved, written to the state file format, read back, set into a fresh
+// Simulation and run 1 s more; on scenes with a grasping gripper, moving obstacles, friction,
+// self-collision, granular particles and a robot with mesh links. A state that does not fit the
+// scene is refused with the field named, and nothing changes.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <functional>
+#include <limits>
+#include <memory>
+#include <sstream>
+#include <string>
+
+#include "pbd_cloth/scene_yaml.h"
+#include "pbd_cloth/sim_state.h"
+#include "pbd_cloth/simulation.h"
+
+namespace pbd_cloth {
+namespace {
+
+const std::string kConfig = std::string(PBD_CLOTH_SOURCE_DIR) + "/config/";
+
+SceneConfig shippedScene(const std::string& file, const std::vector<std::string>& overrides = {}) {
+  YAML::Node root = loadSceneYaml(kConfig + file);
+  for (const std::string& assignment : overrides) applyOverride(root, assignment);
+  return sceneFromYaml(root, sceneFileDirectory(kConfig + file));
+}
+
+// Live inputs a node would give before step `k` (0-based); the same on every path.
+using Drive = std::function<void(Simulation&, int)>;
+
+void run(Simulation& sim, int from, int to, const Drive& drive) {
+  for (int k = from; k < to; ++k) {
+    if (drive) drive(sim, k);
+    sim.step();
+  }
+}
+
+bool sameBits(const Vec3Array& a, const Vec3Array& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(Vec3)) == 0;
+}
+
+std::string bytesOf(const SimulationState& state) {
+  std::ostringstream out;
+  writeState(out, state);
+  return out.str();
+}
+
+// Runs `total` steps straight; saves the state after `split`, round-trips it through the file
+// format, sets it into a fresh Simulation (and into one that ran elsewhere meanwhile) and runs the
+// rest. Returns the state at the split for further checks.
+SimulationState expectContinuesBitForBit(const SceneConfig& scene, int split, int total,
+                                         const Drive& drive = Drive()) {
+  Simulation straight(scene);
+  run(straight, 0, split, drive);
+  SimulationState saved;
+  straight.getState(saved);
+  run(straight, split, total, drive);
+
+  std::stringstream file;
+  writeState(file, saved);
+  SimulationState loaded;
+  std::string reason;
+  EXPECT_TRUE(readState(file, loaded, reason)) << reason;
+  EXPECT_EQ(bytesOf(loaded), bytesOf(saved));
+
+  Simulation fresh(scene);
+  EXPECT_TRUE(fresh.setState(loaded, reason)) << reason;
+  EXPECT_EQ(fresh.time(), saved.time);
+  run(fresh, split, total, drive);
+
+  // A simulation that has been elsewhere (other steps, another grasp) continues the same way.
+  Simulation used(scene);
+  run(used, 0, split / 2 + 3, drive);
+  EXPECT_TRUE(used.setState(loaded, reason)) << reason;
+  run(used, split, total, drive);
+
+  for (const Simulation* resumed : {&fresh, &used}) {
+    EXPECT_EQ(resumed->time(), straight.time());
+    EXPECT_TRUE(sameBits(resumed->particles().position, straight.particles().position));
+    EXPECT_TRUE(sameBits(resumed->particles().velocity, straight.particles().velocity));
+    SimulationState a, b;
+    resumed->getState(a);
+    straight.getState(b);
+    EXPECT_EQ(bytesOf(a), bytesOf(b)) << "the whole state, grippers and caches included";
+  }
+  // Not a trivial agreement: the second half moved the cloth.
+  EXPECT_FALSE(sameBits(saved.position, straight.particles().position));
+  return saved;
+}
+
+// The demo towel on its table, its corner grasped at 0.1 s by a scripted gripper, carried over the
+// towel (friction on the table, self-collision of the fold) and released at 1.7 s: the grasp spans
+// the save at 1 s, the release (with the gripper's velocity) comes after it.
+TEST(SimState, DemoFoldWithScriptedGraspContinuesBitForBit) {
+  SceneConfig scene = shippedScene("demo.yaml");
+  const Vec3 corner(-0.2375, 0.2375, 0.406);
+  auto at = [](const Vec3& p) {
+    Pose pose;
+    pose.position = p;
+    return pose;
+  };
+  scene.grippers[0].trajectory = {{0.0, at(corner), -1},
+                                  {0.1, at(corner), 1},
+                                  {0.8, at(Vec3(0.0, 0.0, 0.6)), -1},
+                                  {1.5, at(Vec3(0.2, -0.2, 0.45)), -1},
+                                  {1.7, at(Vec3(0.2, -0.2, 0.45)), 0}};
+  const SimulationState saved = expectContinuesBitForBit(scene, 60, 120);
+  ASSERT_EQ(saved.grippers.size(), 1u);
+  EXPECT_FALSE(saved.grippers[0].grasped.empty()) << "the grasp spans the save";
+  EXPECT_EQ(saved.grippers[0].next_waypoint, 3u);
+}
+
+// The same fold with Verlet (its velocity is the half-step velocity x_n - x_{n-1}).
+TEST(SimState, VerletContinuesBitForBit) {
+  SceneConfig scene = shippedScene("demo.yaml", {"solver.method=verlet"});
+  Pose corner;
+  corner.position = Vec3(-0.2375, 0.2375, 0.406);
+  Pose up = corner;
+  up.position.z() += 0.3;
+  scene.grippers[0].trajectory = {{0.0, corner, 1}, {1.5, up, -1}};
+  expectContinuesBitForBit(scene, 60, 120);
+}
+
+// The drape scene (ball, table, floor; friction; self-collision) with a live gripper that grasps
+// an edge and pulls it (released after the save) and the ball moved by live poses, as the node
+// drives them.
+TEST(SimState, DrapeWithLiveGripperAndMovingObstacleContinuesBitForBit) {
+  SceneConfig scene =
+      shippedScene("drape.yaml", {"grippers=[{name: pinch, radius: 0.08}]", "cloth.rows=24",
+                                  "cloth.cols=24", "cloth.spacing=0.04"});
+  const int ball = 0;
+  const Drive drive = [ball](Simulation& sim, int k) {
+    Pose pose;
+    pose.position = Vec3(0.1 * std::sin(0.05 * k), 0.0, 0.5);
+    sim.setObstaclePose(ball, pose);
+    Pose grip = sim.gripperPose(0);
+    if (k == 19) grip.position = sim.particles().position[0];
+    if (k > 20) grip.position.z() += 0.004;
+    if (k >= 19) sim.setGripperPose(0, grip);
+    if (k == 20) sim.setGrasp(0, true);
+    if (k == 90) sim.setGrasp(0, false);
+  };
+  const SimulationState saved = expectContinuesBitForBit(scene, 60, 120, drive);
+  EXPECT_FALSE(saved.grippers[0].grasped.empty());
+  EXPECT_TRUE(saved.grippers[0].live);
+}
+
+// Granular particles poured on a hanging cloth: particle-particle contacts with friction.
+TEST(SimState, GranularPileContinuesBitForBit) {
+  const SceneConfig scene =
+      shippedScene("hanging.yaml",
+                   {"cloth.rows=12", "cloth.cols=12", "cloth.spacing=0.05", "cloth.pinned=[0,11]",
+                    "granular={count: 60, radius: 0.01, mass: 0.001, "
+                    "region: {min: [0.1, -0.3, 1.2], max: [0.3, -0.1, 1.4]}}"});
+  expectContinuesBitForBit(scene, 60, 120);
+}
+
+// The robot demo's arm (mesh links, padding, friction) with its script four times as fast, so
+// the forearm sweeps through the hanging cloth (tethers, self-collision) across the save: the
+// mesh links' contact caches are part of the state.
+TEST(SimState, RobotWithMeshLinksSweepingTheClothContinuesBitForBit) {
+  setenv("ROS_PACKAGE_PATH", PBD_CLOTH_SOURCE_DIR, 1);  // the URDF's package:// meshes
+  SceneConfig scene = shippedScene("robot_demo.yaml", {"robot.urdf_file=../urdf/demo_arm.urdf"});
+  for (JointWaypoint& waypoint : scene.robot.joint_trajectory) waypoint.t *= 0.25;
+  const SimulationState saved = expectContinuesBitForBit(scene, 60, 120);
+  EXPECT_FALSE(saved.mesh_contacts.empty()) << "the arm's meshes were queried before the save";
+  EXPECT_EQ(saved.robot_links.size(), scene.robot.model.links.size());
+}
+
+// --- Refusals ---------------------------------------------------------------------------------
+
+class SimStateRefusal : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    SceneConfig scene = shippedScene("demo.yaml");
+    Pose corner;
+    corner.position = Vec3(-0.2375, 0.2375, 0.406);
+    scene.grippers[0].trajectory = {{0.0, corner, 1}};
+    sim_ = std::make_unique<Simulation>(scene);
+    run(*sim_, 0, 10, Drive());
+    sim_->getState(good_);
+    ASSERT_FALSE(good_.grippers[0].grasped.empty());
+  }
+
+  // Refused, with `field` in the reason, and the simulation exactly as it was.
+  void expectRefused(const SimulationState& bad, const std::string& field) {
+    SimulationState before;
+    sim_->getState(before);
+    const std::vector<double> inverse_mass = sim_->particles().inverse_mass;
+    std::string reason;
+    EXPECT_FALSE(sim_->setState(bad, reason));
+    EXPECT_NE(reason.find(field), std::string::npos) << "reason: " << reason;
+    SimulationState after;
+    sim_->getState(after);
+    EXPECT_EQ(bytesOf(after), bytesOf(before));
+    EXPECT_EQ(sim_->particles().inverse_mass, inverse_mass);
+  }
+
+  std::unique_ptr<Simulation> sim_;
+  SimulationState good_;
+};
+
+TEST_F(SimStateRefusal, WrongParticleCount) {
+  SimulationState bad = good_;
+  bad.position.pop_back();
+  expectRefused(bad, "positions: 399 given, the scene has 400 particles");
+}
+
+TEST_F(SimStateRefusal, NonFiniteValues) {
+  SimulationState bad = good_;
+  bad.velocity[7].y() = std::numeric_limits<double>::quiet_NaN();
+  expectRefused(bad, "velocities[7]: not finite");
+  bad = good_;
+  bad.position[3].x() = std::numeric_limits<double>::infinity();
+  expectRefused(bad, "positions[3]");
+  bad = good_;
+  bad.grippers[0].target.orientation.w() = std::numeric_limits<double>::quiet_NaN();
+  expectRefused(bad, "grippers[0].target.orientation");
+  bad = good_;
+  bad.colliders[1].pose.position.z() = std::numeric_limits<double>::quiet_NaN();
+  expectRefused(bad, "colliders[1].pose.position");
+  bad = good_;
+  bad.time = -1.0;
+  expectRefused(bad, "time");
+}
+
+TEST_F(SimStateRefusal, GraspsThatDoNotFit) {
+  SimulationState bad = good_;
+  bad.grippers[0].grasped[0] = 400;
+  expectRefused(bad, "grippers[0].grasped[0]: particle 400 is not a cloth particle");
+  bad = good_;
+  bad.grippers[0].grasped.push_back(bad.grippers[0].grasped[0]);
+  bad.grippers[0].grasp_offsets.push_back(Vec3::Zero());
+  expectRefused(bad, "is held twice");
+  bad = good_;
+  bad.grippers[0].grasp_offsets.pop_back();
+  expectRefused(bad, "grippers[0].grasp_offsets");
+  bad = good_;
+  bad.grippers[0].next_waypoint = 5;
+  expectRefused(bad, "grippers[0].next_waypoint");
+}
+
+TEST_F(SimStateRefusal, BodiesOfAnotherScene) {
+  SimulationState bad = good_;
+  bad.grippers[0].name = "left";
+  expectRefused(bad, "grippers[0].name: 'left', the scene's is 'hand'");
+  bad = good_;
+  bad.grippers.clear();
+  expectRefused(bad, "grippers: 0 given, the scene has 1");
+  bad = good_;
+  bad.colliders.pop_back();
+  expectRefused(bad, "colliders: 1 given");
+  bad = good_;
+  bad.robot_links.push_back(BodySnapshot());
+  expectRefused(bad, "robot_links: 1 given, the scene has 0");
+  bad = good_;
+  bad.mesh_contacts.push_back(MeshContactCache());
+  expectRefused(bad, "mesh_contacts[0].collider: 0 is not a mesh collider");
+}
+
+TEST(SimStateFile, BadFilesAreRefusedWithTheReason) {
+  Simulation sim(shippedScene("demo.yaml"));
+  SimulationState state;
+  sim.getState(state);
+  std::stringstream file;
+  writeState(file, state);
+  const std::string bytes = file.str();
+  SimulationState read;
+  std::string reason;
+
+  std::istringstream truncated(bytes.substr(0, bytes.size() / 2));
+  EXPECT_FALSE(readState(truncated, read, reason));
+  EXPECT_NE(reason.find("bytes"), std::string::npos) << reason;
+
+  std::istringstream not_a_state("index,x,y,z\n0,1,2,3\n");
+  EXPECT_FALSE(readState(not_a_state, read, reason));
+  EXPECT_NE(reason.find("not a pbd_cloth state file"), std::string::npos) << reason;
+
+  std::string newer = bytes;
+  newer[8] = static_cast<char>(kStateFileVersion + 1);
+  std::istringstream future(newer);
+  EXPECT_FALSE(readState(future, read, reason));
+  EXPECT_NE(reason.find("version 2"), std::string::npos) << reason;
+
+  std::istringstream trailing(bytes + "x");
+  EXPECT_FALSE(readState(trailing, read, reason));
+  EXPECT_NE(reason.find("1 bytes after the end"), std::string::npos) << reason;
+
+  EXPECT_FALSE(readStateFile("/nonexistent/dir/state.bin", read, reason));
+  EXPECT_NE(reason.find("/nonexistent/dir/state.bin"), std::string::npos) << reason;
+}
+
+TEST(SimStateFile, SolverDataRoundTripsAndEmptyMeansPositions) {
+  SimulationState state;
+  state.substep_start = {Vec3(1.0 / 3.0, -0.0, 1e-300)};
+  state.mesh_contacts = {{4, 2, 17, 0.125, Vec3(0.1, 0.2, 0.3)}};
+  SimulationState read;
+  std::string reason;
+  ASSERT_TRUE(decodeSolverData(encodeSolverData(state), read, reason)) << reason;
+  EXPECT_TRUE(sameBits(read.substep_start, state.substep_start));
+  ASSERT_EQ(read.mesh_contacts.size(), 1u);
+  EXPECT_EQ(read.mesh_contacts[0].triangle, 17);
+  EXPECT_FALSE(decodeSolverData({1, 2, 3}, read, reason));
+  EXPECT_NE(reason.find("solver_data"), std::string::npos) << reason;
+}
+
+}  // namespace
+}  // namespace pbd_cloth
