@@ -20,7 +20,8 @@ namespace {
 
 const char kUsage[] =
     "Usage: cloth_bench --config <scene.yaml> --duration <s> [options]\n"
-    "Runs the scene without ROS for round(duration * step_rate) steps of 1/step_rate s and prints\n"
+    "Runs the scene without ROS (from its initial state, or from --load-state) for\n"
+    "round(duration * step_rate) steps of 1/step_rate s and prints\n"
     "one line of key=value metrics on stdout (wall_ms_per_step max_strain mean_strain\n"
     "max_penetration self_intersections energy finite steps sim_time iterations_per_step\n"
     "predict_ms collide_ms project_ms update_ms contact_ms broad_phase_runs method substeps\n"
@@ -30,8 +31,8 @@ const char kUsage[] =
     "step otherwise (metrics are expensive on big scenes), and always at the last step; the other\n"
     "metrics are those of the final state. The run stops early at the first sample with a\n"
     "non-finite position or velocity (finite=0, steps = the steps actually run). Exit status 0\n"
-    "after a run (also with finite=0), 2 for a bad argument or scene key, 1 for any other "
-    "failure.\n"
+    "after a run (also with finite=0), 2 for a bad argument, scene key or --load-state file, 1\n"
+    "for any other failure.\n"
     "\n"
     "Options:\n"
     "  --config <file>        scene YAML (the format of config/hanging.yaml)\n"
@@ -44,6 +45,13 @@ const char kUsage[] =
     "  --sample-every <n>     sample the metrics every n steps instead (n >= 1)\n"
     "  --positions <file>     write the final positions as index,x,y,z lines (no header)\n"
     "  --mesh <file.obj>      write the final cloth as a Wavefront OBJ (v and 1-based f lines)\n"
+    "  --save-state <file>    write the final state (binary, sim_state.h): positions,\n"
+    "                         velocities, grasps, body poses, contact caches\n"
+    "  --load-state <file>    start from a state saved with --save-state on the same scene and\n"
+    "                         run --duration more: a run of 2 s equals, bit for bit, a run of 1 s\n"
+    "                         saved, loaded and run 1 s more. A file that does not fit the scene\n"
+    "                         (particle count, bodies, non-finite values) exits with 2 and the\n"
+    "                         reason"
     "  --target-max-strain <e>  instead of one run, search substeps x iterations (iterations\n"
     "                         1, 2, 4, 8; substeps by doubling then bisection up to\n"
     "                         --max-substeps, default 256; settings with at least the passes of\n"
@@ -59,6 +67,8 @@ constexpr int kLargeScene = 5000;  // particles; above it the metrics are sample
 using pbd_cloth::bench::UsageError;
 
 struct Options : pbd_cloth::bench::CommonOptions {
+  std::string save_state;          // --save-state: the final state goes there
+  std::string load_state;          // --load-state: the run starts from it
   double target_max_strain = 0.0;  // > 0: search the cheapest setting instead of one run
   double target_mean_strain = 0.0;
   int max_substeps = 256;  // upper end of the search
@@ -80,6 +90,10 @@ Options parseArguments(int argc, char** argv) {
       }
       (option == "--target-max-strain" ? options.target_max_strain : options.target_mean_strain) =
           target;
+    } else if (option == "--save-state") {
+      options.save_state = next();
+    } else if (option == "--load-state") {
+      options.load_state = next();
     } else if (option == "--max-substeps") {
       options.max_substeps = bench::parseCount(option, next(), 1, 100000);
     } else {
@@ -90,6 +104,10 @@ Options parseArguments(int argc, char** argv) {
   bench::requireCommonOptions(options);
   if (options.target_max_strain > 0.0 && options.target_mean_strain > 0.0) {
     throw UsageError("give --target-max-strain or --target-mean-strain, not both");
+  }
+  if ((options.target_max_strain > 0.0 || options.target_mean_strain > 0.0) &&
+      (!options.save_state.empty() || !options.load_state.empty())) {
+    throw UsageError("--save-state and --load-state are for one run, not the target search");
   }
   return options;
 }
@@ -143,6 +161,14 @@ struct BenchResult {
 BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options,
                      std::ofstream& csv, std::ofstream& positions, std::ofstream& mesh) {
   pbd_cloth::Simulation sim(scene);
+  if (!options.load_state.empty()) {
+    pbd_cloth::SimulationState state;
+    std::string reason;
+    if (!pbd_cloth::readStateFile(options.load_state, state, reason) ||
+        !sim.setState(state, reason)) {
+      throw pbd_cloth::ConfigError("--load-state", "'" + options.load_state + "': " + reason);
+    }
+  }
   const double step_count = options.duration * scene.step_rate;
   if (step_count > std::numeric_limits<int>::max()) {
     throw UsageError("--duration: " + std::to_string(step_count) + " steps are too many");
@@ -196,6 +222,14 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
   }
   if (positions.is_open()) writePositions(positions, sim.particles());
   if (mesh.is_open()) writeMesh(mesh, sim);
+  if (!options.save_state.empty()) {
+    pbd_cloth::SimulationState state;
+    sim.getState(state);
+    std::string reason;
+    if (!pbd_cloth::writeStateFile(options.save_state, state, reason)) {
+      throw std::runtime_error("--save-state: " + reason);
+    }
+  }
   const double per_step = done > 0 ? 1.0 / static_cast<double>(done) : 0.0;
   result.steps = done;
   result.sim_time = sim.time();
@@ -323,6 +357,9 @@ int run(const Options& options) {
   std::ofstream csv = pbd_cloth::bench::openOutput("--csv", options.csv);
   std::ofstream positions = pbd_cloth::bench::openOutput("--positions", options.positions);
   std::ofstream mesh = pbd_cloth::bench::openOutput("--mesh", options.mesh);
+  // Written after the run; opened now only so a bad path fails before it.
+  std::ofstream state_file = pbd_cloth::bench::openOutput("--save-state", options.save_state);
+  state_file.close();
   if (csv.is_open()) csv << "t,max_strain,mean_strain,energy,max_penetration\n";
 
   const BenchResult result = simulate(scene, options, csv, positions, mesh);

@@ -129,6 +129,68 @@ TEST(ClothBench, BadKeyOrArgumentExitsWithTwoAndNamesIt) {
   EXPECT_NE(run.out.find("--duration"), std::string::npos) << run.out;
 }
 
+// The demo towel with its corner grasped and carried over it (friction on the table, the fold's
+// self-collision), the grasp spanning the save at 1 s.
+BenchRun runDemoFold(const std::string& arguments) {
+  return runShell(std::string(CLOTH_BENCH) + " --quiet --config " + PBD_CLOTH_SOURCE_DIR +
+                  "/config/demo.yaml --set 'grippers.0.trajectory=["
+                  "{t: 0.0, pose: [-0.2375, 0.2375, 0.406, 0, 0, 0, 1], grasp: true},"
+                  "{t: 1.5, pose: [0.2, -0.2, 0.6, 0, 0, 0, 1]}]' " +
+                  arguments);
+}
+
+TEST(ClothBench, SavedAndLoadedRunEqualsTheStraightRunBitForBit) {
+  const std::string dir = ::testing::TempDir();
+  const BenchRun straight = runDemoFold("--duration 2 --positions " + dir + "straight.csv" +
+                                        " --save-state " + dir + "straight.state");
+  ASSERT_EQ(straight.status, 0) << straight.out;
+  const BenchRun first = runDemoFold("--duration 1 --positions " + dir + "half.csv" +
+                                     " --save-state " + dir + "half.state");
+  ASSERT_EQ(first.status, 0) << first.out;
+  const BenchRun second =
+      runDemoFold("--duration 1 --load-state " + dir + "half.state --positions " + dir +
+                  "resumed.csv --save-state " + dir + "resumed.state");
+  ASSERT_EQ(second.status, 0) << second.out;
+  EXPECT_EQ(keyValues(second.out).at("sim_time"), "2");
+  EXPECT_EQ(keyValues(second.out).at("steps"), "60");
+  // Positions with max_digits10 digits, and the whole state, byte for byte.
+  const std::string positions = readFile(dir + "straight.csv");
+  EXPECT_EQ(std::count(positions.begin(), positions.end(), '\n'), 400);
+  EXPECT_EQ(readFile(dir + "resumed.csv"), positions);
+  EXPECT_NE(readFile(dir + "half.csv"), positions) << "the second second moved the cloth";
+  const std::string state = readFile(dir + "straight.state");
+  EXPECT_GT(state.size(), 400u * 2 * 3 * sizeof(double));
+  EXPECT_TRUE(readFile(dir + "resumed.state") == state) << "state files differ";
+}
+
+TEST(ClothBench, StateThatDoesNotFitTheSceneExitsWithTwoAndTheReason) {
+  const std::string dir = ::testing::TempDir();
+  ASSERT_EQ(runDemoFold("--duration 0.1 --save-state " + dir + "fold.state --positions " + dir +
+                        "fold.csv")
+                .status,
+            0);
+  // Another cloth size: the particle count does not fit.
+  BenchRun run =
+      runDemoFold("--duration 0.1 --set cloth.rows=10 --load-state " + dir + "fold.state");
+  EXPECT_EQ(run.status, 2);
+  EXPECT_NE(run.out.find("--load-state"), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find("positions: 400 given, the scene has 200 particles"), std::string::npos)
+      << run.out;
+  // Another scene: the gripper is not there.
+  run = runBench("--duration 0.1 --set cloth.rows=20 --set cloth.cols=20 --load-state " + dir +
+                 "fold.state");
+  EXPECT_EQ(run.status, 2);
+  EXPECT_NE(run.out.find("grippers: 1 given, the scene has 0 grippers"), std::string::npos)
+      << run.out;
+  // Not a state file at all, and no file.
+  run = runDemoFold("--duration 0.1 --load-state " + dir + "fold.csv");
+  EXPECT_EQ(run.status, 2);
+  EXPECT_NE(run.out.find("not a pbd_cloth state file"), std::string::npos) << run.out;
+  run = runDemoFold("--duration 0.1 --load-state " + dir + "no_such.state");
+  EXPECT_EQ(run.status, 2);
+  EXPECT_NE(run.out.find("cannot read"), std::string::npos) << run.out;
+}
+
 // A scene with a robot URDF and a mesh obstacle, run from another working directory: the files
 // are found relative to the scene file, load warnings go to stderr, a bad mesh stops the run.
 TEST(ClothBench, RobotSceneFilesAreRelativeToTheSceneFile) {
