@@ -14,6 +14,7 @@
 #include "pbd_cloth/metrics.h"
 #include "pbd_cloth/ros/ros_conversions.h"
 #include "pbd_cloth/ros/ros_params.h"
+#include "pbd_cloth/ros/state_conversions.h"
 #include "pbd_cloth/scene_assets.h"
 
 namespace pbd_cloth {
@@ -79,6 +80,8 @@ ClothRos::ClothRos(ros::NodeHandle nh, ros::NodeHandle nh_private)
   state_pub_ = nh_private_.advertise<ClothState>("state", 1);
   markers_pub_ = nh_private_.advertise<visualization_msgs::MarkerArray>("markers", 1);
   reset_service_ = nh_private_.advertiseService("reset", &ClothRos::resetCallback, this);
+  get_state_service_ = nh_private_.advertiseService("get_state", &ClothRos::getStateCallback, this);
+  set_state_service_ = nh_private_.advertiseService("set_state", &ClothRos::setStateCallback, this);
   // A std_msgs-only way to grasp by name, so a grasp on a gripper the scene does not have reaches
   // the node (a missing ~<name>/grasp service cannot be called) and is counted as rejected.
   grasp_by_name_sub_ =
@@ -564,6 +567,54 @@ void ClothRos::resetSimulation(const ros::Time& origin) {
   clock_factor_.clear();
   // Publish the initial state at once, so a client sees it before the next step moves it.
   publishState();
+}
+
+bool ClothRos::getStateCallback(GetState::Request& /*request*/, GetState::Response& response) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  SimulationState state;
+  sim_->getState(state);
+  StateConversions::toMessage(state, response.state);
+  response.state.header.frame_id = sim_->scene().frame_id;
+  response.state.header.stamp = stateTime();
+  return true;
+}
+
+bool ClothRos::setStateCallback(SetState::Request& request, SetState::Response& response) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const std::string& frame = sim_->scene().frame_id;
+  SimulationState state;
+  std::string reason;
+  if (!request.state.header.frame_id.empty() && request.state.header.frame_id != frame) {
+    reason = "header.frame_id: '" + request.state.header.frame_id + "', the scene's is '" + frame +
+             "' (states are not transformed)";
+  }
+  // Before the state changes: the ROS time the set state will be stamped with.
+  const ros::Time stamp = config_.publish_clock ? stateTime() : ros::Time::now();
+  if (!reason.empty() || !StateConversions::fromMessage(request.state, state, reason) ||
+      !sim_->setState(state, reason)) {
+    rejections_.reject(set_state_service_.getService(), RejectReason::kBadValue,
+                       reason + " (the state is unchanged)");
+    response.success = false;
+    response.message = reason;
+    return true;
+  }
+  step_clock_.continueFrom(stamp, sim_->time());
+  publish_ticks_.restart(sim_->time());
+  // As after a reset: bodies start afresh from the set poses, and simulated time jumped.
+  for (Body& body : bodies_) {
+    body.follower.reset();
+    body.last_stamp = ros::Time();
+    if (body.kind == BodyKind::kRobotLink) body.link_enabled = sim_->robotLinkEnabled(body.index);
+  }
+  real_time_factor_.clear();
+  clock_factor_.clear();
+  publishState();
+  std::ostringstream message;
+  message << "continuing from sim_time " << sim_->time() << " s";
+  response.success = true;
+  response.message = message.str();
+  ROS_INFO("~set_state: %s.", response.message.c_str());
+  return true;
 }
 
 bool ClothRos::graspCallback(const Body& body, std_srvs::SetBool::Request& request,

@@ -19,7 +19,7 @@ StepClock::Plan StepClock::update(const ros::Time& now, double sim_time) {
     return plan;
   }
   if (!started_) {
-    restart(now);
+    continueFrom(now, sim_time);
     plan.started = true;
     return plan;
   }
@@ -44,6 +44,12 @@ StepClock::Plan StepClock::update(const ros::Time& now, double sim_time) {
     plan.steps = static_cast<int>(due);
   }
   return plan;
+}
+
+void StepClock::continueFrom(const ros::Time& stamp, double sim_time) {
+  origin_ = stamp.toSec() > sim_time ? stamp - ros::Duration(sim_time) : ros::Time();
+  last_now_ = stamp;
+  started_ = !stamp.isZero();
 }
 
 void StepClock::restart(const ros::Time& origin) {

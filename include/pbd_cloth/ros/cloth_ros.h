@@ -15,6 +15,14 @@
 //                             and is counted as a rejected input (a missing service cannot be
 //                             called, so it could never be counted)
 //   ~reset                    std_srvs/Trigger
+//   ~get_state, ~set_state    pbd_cloth/GetState, SetState: the full dynamic state, and continuing
+//                             from one (same scene). A state that does not fit is refused
+//                             (success false, the reason; counted as a rejected input) and nothing
+//                             changes. After a set, simulated time continues from the state's
+//                             sim_time while stamps keep going forward: the set state is stamped
+//                             with the ROS time of the call (with ~publish_clock: the node's clock
+//                             then, which does not go back), and the bodies stay at the state's
+//                             poses until their next pose or tf sample.
 //   ~set_parameters, ...      dynamic_reconfigure of cfg/Solver.cfg (solver_reconfigure.h)
 //   /diagnostics              cloth_diagnostics.h
 //   /clock                    out, only with ~publish_clock: rosgraph_msgs/Clock after every step
@@ -75,6 +83,8 @@
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
 
+#include "pbd_cloth/GetState.h"
+#include "pbd_cloth/SetState.h"
 #include "pbd_cloth/ros/cloth_diagnostics.h"
 #include "pbd_cloth/ros/input_rejections.h"
 #include "pbd_cloth/ros/pose_follower.h"
@@ -147,6 +157,8 @@ class ClothRos {
   void clockLoop();
   void diagnosticsCallback(const ros::WallTimerEvent& event);
   bool resetCallback(std_srvs::Trigger::Request& request, std_srvs::Trigger::Response& response);
+  bool getStateCallback(GetState::Request& request, GetState::Response& response);
+  bool setStateCallback(SetState::Request& request, SetState::Response& response);
   void poseCallback(Body& body, const geometry_msgs::PoseStamped& msg);
   bool graspCallback(const Body& body, std_srvs::SetBool::Request& request,
                      std_srvs::SetBool::Response& response);
@@ -205,6 +217,8 @@ class ClothRos {
   ros::Publisher markers_pub_;
   ros::Publisher clock_pub_;  // publish_clock only
   ros::ServiceServer reset_service_;
+  ros::ServiceServer get_state_service_;
+  ros::ServiceServer set_state_service_;
   ros::Subscriber grasp_by_name_sub_;
   std::unique_ptr<SolverReconfigure> reconfigure_;
   std::unique_ptr<ClothDiagnostics> diagnostics_;

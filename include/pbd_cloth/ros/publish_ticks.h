@@ -24,8 +24,11 @@ class PublishTicks {
     return true;
   }
 
-  // Simulated time is back at 0; the state at time 0 is published by whoever reset it.
-  void restart() { last_tick_ = 0; }
+  // Simulated time is back at `sim_time` (0 after a reset, a saved state's time after ~set_state);
+  // the state then is published by whoever set it.
+  void restart(double sim_time = 0.0) {
+    last_tick_ = static_cast<long long>(std::floor(sim_time * rate_ + 1e-6));
+  }
 
  private:
   double rate_;

@@ -45,6 +45,13 @@ class StepClock {
   // "not started": the next non-zero time seen becomes the origin.
   void restart(const ros::Time& origin);
 
+  // A saved state was set (~set_state): the state at simulated time `sim_time` is the world at ROS
+  // time `stamp` from now on, so stamps keep going forward while simulated time jumps. When the
+  // state is later than `stamp` (sim_time > stamp, e.g. /clock restarted at 0) the origin is 0 and
+  // the state is stamped sim_time: no step is due until ROS time reaches it. A zero stamp means
+  // "not started": the first non-zero ROS time seen becomes the stamp of the current state.
+  void continueFrom(const ros::Time& stamp, double sim_time);
+
   // The ROS time of the state at simulated time `sim_time`.
   ros::Time stateTime(double sim_time) const { return origin_ + ros::Duration(sim_time); }
   const ros::Time& origin() const { return origin_; }
