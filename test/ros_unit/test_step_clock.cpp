@@ -81,6 +81,34 @@ TEST(StepClock, ARestartAtZeroWaitsForTheNextTime) {
   EXPECT_EQ(clock.origin(), ros::Time(7.0));
 }
 
+// ~set_state: simulated time jumps back to the set state's, stamps go on forward from the call.
+TEST(StepClock, ASetStateIsStampedWithTheTimeOfTheCall) {
+  StepClock clock(StepClock::Config{kPeriod, 10});
+  double sim = 0.0;
+  clock.update(ros::Time(100.0), sim);
+  sim = run(clock.update(ros::Time(100.05), sim), sim);  // 5 steps: sim 0.05
+  clock.continueFrom(ros::Time(100.05), 0.02);           // a state saved at 0.02 s
+  sim = 0.02;
+  EXPECT_EQ(clock.stateTime(sim), ros::Time(100.05));
+  EXPECT_EQ(clock.update(ros::Time(100.05), sim).steps, 0);
+  StepClock::Plan plan = clock.update(ros::Time(100.07), sim);
+  EXPECT_EQ(plan.steps, 2);
+  sim = run(plan, sim);
+  EXPECT_NEAR((clock.stateTime(sim) - ros::Time(100.07)).toSec(), 0.0, 1e-9);
+  // A state later than ROS time (/clock restarted at 0): stamped with its own time, and nothing is
+  // due until ROS time gets there.
+  clock.continueFrom(ros::Time(3.0), 10.0);
+  EXPECT_EQ(clock.stateTime(10.0), ros::Time(10.0));
+  EXPECT_EQ(clock.update(ros::Time(5.0), 10.0).steps, 0);
+  EXPECT_EQ(clock.update(ros::Time(10.02), 10.0).steps, 2);
+  // Set while no /clock has arrived: the first time seen stamps the state then current.
+  StepClock waiting(StepClock::Config{kPeriod, 10});
+  waiting.continueFrom(ros::Time(), 2.0);
+  EXPECT_FALSE(waiting.started());
+  EXPECT_TRUE(waiting.update(ros::Time(50.0), 2.0).started);
+  EXPECT_EQ(waiting.stateTime(2.0), ros::Time(50.0));
+}
+
 TEST(PublishTicks, OneStateForEachTickOfSimulatedTime) {
   // 120 Hz steps, 30 Hz publishing: every fourth step, although 4/120 sums to a hair below 1/30.
   PublishTicks ticks(30.0);
@@ -108,6 +136,11 @@ TEST(PublishTicks, OneStateForEachTickOfSimulatedTime) {
   EXPECT_FALSE(ticks.due(0.0));
   EXPECT_FALSE(ticks.due(0.02));
   EXPECT_TRUE(ticks.due(1.0 / 30.0));
+  // After a set state at 2 s (or any time, earlier than the last tick included): that state
+  // counts as published, the next tick follows it.
+  ticks.restart(2.0);
+  EXPECT_FALSE(ticks.due(2.0));
+  EXPECT_TRUE(ticks.due(2.0 + 1.0 / 30.0));
 }
 
 }  // namespace
