@@ -226,22 +226,7 @@ double TriangleMesh::signedDistance(const Vec3& x, Vec3& normal, int* hint) cons
     const Node& node = nodes_[stack[--top]];
     if (boxDistanceSquared(x, node.lo, node.hi) >= best) continue;
     if (node.count > 0) {
-      for (int k = node.first; k < node.first + node.count; ++k) {
-        const int t = order_[k];
-        const Triangle& tri = triangles_[t];
-        Feature feature;
-        int index;
-        const Vec3 c = closestOnTriangle(x, vertices_[tri[0]], vertices_[tri[1]], vertices_[tri[2]],
-                                         feature, index);
-        const double d2 = (x - c).squaredNorm();
-        if (d2 < best) {
-          best = d2;
-          closest = c;
-          best_triangle = t;
-          best_feature = feature;
-          best_index = index;
-        }
-      }
+      for (int k = node.first; k < node.first + node.count; ++k) test_triangle(order_[k]);
       continue;
     }
     const Node& left = nodes_[node.first];

@@ -310,11 +310,16 @@ void ClothRos::pollTfFrames(double arrival) {
       body.tf_ok = false;
       continue;
     }
+    // A tf sample is timed by its stamp (the time the pose is of), not by when this poll saw it:
+    // the step being driven ends at or before now, so a sample timed "now" would leave the body
+    // at its start on every step that brings a new stamp, and a frame updated about once a step
+    // (robot_state_publisher at 50 Hz) would hardly move. Stamp 0 (static): its arrival.
+    const double sample_time = stamp.isZero() ? arrival : stamp.toSec();
     if (body.kind == BodyKind::kRobotLink && (!body.link_enabled || !body.follower.active())) {
-      placeRobotLink(body, pose, arrival);
+      placeRobotLink(body, pose, sample_time);
     } else if (!body.follower.active() || stamp != body.last_stamp) {
       // A static frame keeps stamp 0: it becomes a sample once, then the body stays there.
-      body.follower.addSample(currentPose(body), pose, arrival);
+      body.follower.addSample(currentPose(body), pose, sample_time);
     }
     body.last_stamp = stamp;
     body.tf_seen = body.tf_ok = true;

@@ -65,9 +65,18 @@ bool PoseTransformer::toSceneFrame(const geometry_msgs::PoseStamped& msg, Pose& 
     return true;
   }
 
+  // Waited for in wall time, not with canTransform's own timeout: that one counts and sleeps in
+  // ROS time, so under /use_sim_time with /clock paused (a paused bag) it would never return and
+  // the input thread would hang. The wait is for tf messages to arrive, a wall-time matter.
   std::string error;
-  if (!buffer_.canTransform(config_.frame_id, frame, msg.header.stamp,
-                            ros::Duration(config_.timeout), &error)) {
+  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(config_.timeout);
+  bool available = buffer_.canTransform(config_.frame_id, frame, msg.header.stamp, &error);
+  while (!available && ros::WallTime::now() < deadline) {
+    ros::WallDuration(0.005).sleep();
+    error.clear();
+    available = buffer_.canTransform(config_.frame_id, frame, msg.header.stamp, &error);
+  }
+  if (!available) {
     std::ostringstream detail;
     if (!buffer_._frameExists(frame)) {
       detail << "tf has no frame '" << frame << "' (waited " << config_.timeout << " s)";

@@ -259,7 +259,17 @@ void RosConversions::toMarkerArray(const Simulation& sim, const std_msgs::Header
   markers.markers.clear();
   visualization_msgs::Marker mesh;
   if (toMeshMarker(sim, header, mesh)) {
+    // rviz lights a TRIANGLE_LIST from one side only; seen from behind the cloth was black. Its
+    // back is the same triangles wound the other way, a shade darker (ns cloth_back), so both
+    // sides are lit and the two sides of a fold tell apart.
+    visualization_msgs::Marker back = mesh;
+    back.ns = "cloth_back";
+    back.color = color(0.6f, 0.25f, 0.15f);
+    for (std::size_t k = 0; k + 2 < back.points.size(); k += 3) {
+      std::swap(back.points[k + 1], back.points[k + 2]);
+    }
     markers.markers.push_back(mesh);
+    markers.markers.push_back(back);
   }
   toParticleMarkers(sim, header, markers);
   toObstacleMarkers(sim, header, markers);

@@ -5,10 +5,14 @@
 //   the new time) and counts one rejected input;
 // - /clock jumping 100 s ahead: the node keeps running without a reset, its stamps go forward
 //   only, and it does not simulate the 100 s (catch-up is bounded: consecutive states stay one
-//   publish period of simulated time apart while their stamps jump).
+//   publish period of simulated time apart while their stamps jump);
+// - /clock paused: a pose in a frame tf does not know is still refused after ~tf_timeout of wall
+//   time (tf2's own timeout counts ROS time and would wait for /clock forever).
 #include <memory>
+#include <string>
 #include <vector>
 
+#include <diagnostic_msgs/DiagnosticArray.h>
 #include <gtest/gtest.h>
 #include <ros/ros.h>
 
@@ -100,6 +104,39 @@ TEST(ClockJump, ClockJumpingAheadKeepsRunningWithStampsGoingForward) {
     if (b.header.stamp.toSec() - a.header.stamp.toSec() > 50.0) crossed = true;
   }
   EXPECT_TRUE(crossed) << "no pair of consecutive states across the jump";
+}
+
+// The node's count of rejected inputs in its diagnostics ("<node>: inputs"), or -1.
+int rejectedInDiagnostics(const diagnostic_msgs::DiagnosticArray& array) {
+  const std::string name = node().substr(1) + ": inputs";
+  for (const auto& status : array.status) {
+    if (status.name != name) continue;
+    for (const auto& value : status.values) {
+      if (value.key == "rejected inputs") return std::stoi(value.value);
+    }
+  }
+  return -1;
+}
+
+TEST(ClockJump, APoseWaitingForTfIsRefusedWhileTheClockIsPaused) {
+  ASSERT_TRUE(clock_publisher);
+  pbd_cloth_test::Recorder<diagnostic_msgs::DiagnosticArray> diagnostics("/diagnostics");
+  pbd_cloth_test::PosePublisher gripper(node() + "/left/pose");
+  ASSERT_TRUE(gripper.waitForSubscriber());
+  ClothState state;
+  ASSERT_TRUE(states().waitForNext(state, 10.0));
+  clock_publisher->freeze();
+  // The diagnostics come on a wall timer, so they report while simulated time stands still.
+  diagnostic_msgs::DiagnosticArray array;
+  ASSERT_TRUE(diagnostics.waitForNext(array, 10.0, [](const diagnostic_msgs::DiagnosticArray& a) {
+    return rejectedInDiagnostics(a) >= 0;
+  }));
+  const int before = rejectedInDiagnostics(array);
+  gripper.publish(pbd_cloth_test::poseStamped("nowhere", pbd_cloth_test::point(0.0, 0.0, 0.5)));
+  EXPECT_TRUE(diagnostics.waitForNext(array, 10.0, [&](const diagnostic_msgs::DiagnosticArray& a) {
+    return rejectedInDiagnostics(a) == before + 1;
+  })) << "the pose in an unknown frame was not refused while /clock was paused";
+  clock_publisher->resume();
 }
 
 }  // namespace

@@ -91,7 +91,7 @@ class ClothRos {
  public:
   // Node settings beside the scene, private parameters of their own (ros_params.h reads them).
   struct Config {
-    double tf_timeout = 0.1;        // ~tf_timeout (s): how long a pose waits for its transform
+    double tf_timeout = 0.1;        // ~tf_timeout (wall s): how long a pose waits for its transform
     PoseFollower::Config follower;  // ~pose_period, ~max_pose_period
     ClothDiagnostics::Config diagnostics;  // ~min_real_time_factor
     // ~max_catch_up_steps: steps run at once when ROS time is ahead; beyond, the origin moves.

@@ -19,7 +19,7 @@ class PoseTransformer {
  public:
   struct Config {
     std::string frame_id = "world";  // the scene frame every pose is brought into
-    double timeout = 0.1;            // s: how long a lookup waits for a transform to arrive
+    double timeout = 0.1;            // wall s: how long a lookup waits for a transform to arrive
   };
 
   // Why a pose was refused, for InputRejections.
