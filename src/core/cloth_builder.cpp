@@ -1,6 +1,7 @@
 #include "pbd_cloth/cloth_builder.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -199,9 +200,27 @@ void addMeshNeighbours(int count, ClothTopology& topology) {
       }
     }
   }
-  for (const BendConstraint& bend : topology.bend) {
-    near[bend.index[2]].push_back(bend.index[3]);
-    near[bend.index[3]].push_back(bend.index[2]);
+  // The opposite corners of each pair of triangles sharing an edge (with or without bending).
+  std::vector<std::array<int, 3>> sides;  // edge (a, b), opposite corner
+  sides.reserve(t.size());
+  for (std::size_t k = 0; k < t.size(); k += 3) {
+    for (int e = 0; e < 3; ++e) {
+      const int a = static_cast<int>(t[k + e]), b = static_cast<int>(t[k + (e + 1) % 3]);
+      sides.push_back({std::min(a, b), std::max(a, b), static_cast<int>(t[k + (e + 2) % 3])});
+    }
+  }
+  std::sort(sides.begin(), sides.end());
+  for (std::size_t k = 0; k < sides.size();) {
+    std::size_t end = k + 1;
+    while (end < sides.size() && sides[end][0] == sides[k][0] && sides[end][1] == sides[k][1]) {
+      ++end;
+    }
+    for (std::size_t u = k; u < end; ++u) {
+      for (std::size_t v = k; v < end; ++v) {
+        if (u != v) near[sides[u][2]].push_back(sides[v][2]);
+      }
+    }
+    k = end;
   }
   topology.near_offsets.assign(1, 0);
   topology.near_list.clear();
