@@ -48,6 +48,18 @@ struct BendConstraint {
   double scale = 0.0;                       // sqrt(6 / (A0 + A1))
 };
 
+// Rest term of a hinge of a mesh cloth whose rest shape is not flat (cloth.mesh): the rest
+// mean-curvature vector b0, stored as its components in the frames of the hinge's two triangles
+// (edge direction, in-plane normal to the edge, triangle normal). The projection asks for
+// C = scale (b - b0'), b0' = the mean of b0 carried along by either triangle's current frame, so
+// a curved or folded hinge keeps its rest angle however the cloth moves (solver.cpp, projectBend).
+// Flat hinges (every hinge of the grid) have none and keep C = scale b.
+struct BendRest {
+  bool curved = false;
+  Vec3 in_first = Vec3::Zero();   // b0 in the frame of triangle (x0, x1, x2)
+  Vec3 in_second = Vec3::Zero();  // b0 in the frame of triangle (x0, x1, x3)
+};
+
 // Long-range attachment (Kim, Chentanez, Mueller 2012): a unilateral constraint
 // C = max_length - |x_particle - x_anchor| >= 0 to a kinematic anchor, max_length = rest distance.
 struct Tether {
@@ -57,14 +69,24 @@ struct Tether {
 };
 
 struct ClothTopology {
-  int rows = 0;
+  int rows = 0;  // the grid's; 0 for a mesh cloth
   int cols = 0;
-  std::vector<unsigned>
-      triangles;  // 3 indices per triangle, counter-clockwise seen from +z of the grid
+  // 3 indices per triangle, counter-clockwise seen from +z of the grid; a mesh's in file order.
+  std::vector<unsigned> triangles;
   std::vector<DistanceConstraint> stretch;  // structural first, then shear
   int structural_count = 0;
   std::vector<BendConstraint> bend;
+  // Mesh cloths only: one entry per hinge of `bend` (empty for the grid, whose rest is flat).
+  std::vector<BendRest> bend_rest;
+  // Mesh cloths only (the grid uses rows and cols): for each particle, the sorted particles that
+  // share a triangle or a hinge with it (CSR: near_list[near_offsets[i] .. near_offsets[i+1])).
+  // Edge-edge self-contacts between such neighbours are left out, as for neighbouring grid cells.
+  std::vector<int> near_offsets;
+  std::vector<int> near_list;
   std::vector<Tether> tethers;  // rebuilt when the kinematic set changes
+  bool from_mesh = false;       // built from cloth.mesh (rows = cols = 0)
+  // Particles a and b share a triangle or a hinge (mesh cloths).
+  bool meshNear(int a, int b) const;
   int triangleCount() const { return static_cast<int>(triangles.size() / 3); }
 };
 

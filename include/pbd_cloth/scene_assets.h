@@ -21,6 +21,13 @@ std::shared_ptr<const TriangleMesh> loadMesh(const std::string& uri, const Eigen
                                              const std::string& key,
                                              std::vector<std::string>& warnings);
 
+// Loads cloth.mesh (an OBJ file, path or file:// / package:// URI; tinyobjloader) into
+// scene.cloth.mesh_data, keeping the file's vertex ids, and checks it (cloth_mesh.h
+// makeClothMesh: what is refused and what only warns). The file is first scanned line by line for
+// its v and f lines, so a file with more than kMaxParticles vertices is refused before anything
+// grows with it. Throws ConfigError "cloth.mesh" naming the file (and face or vertex).
+void loadClothMesh(SceneConfig& scene);
+
 // Loads every obstacle mesh of the scene (shape: mesh) into its mesh_data.
 void loadObstacleMeshes(SceneConfig& scene);
 

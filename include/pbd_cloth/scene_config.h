@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cstdint>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -14,6 +15,12 @@
 namespace pbd_cloth {
 
 class TriangleMesh;  // triangle_mesh.h: a loaded mesh shape with its signed-distance queries
+struct ClothMesh;    // cloth_mesh.h: the triangles of cloth.mesh with the file's vertex ids
+
+// Upper limit of cloth and granular particle counts: not physics but protection of the process
+// (a typo like rows: 50000, or a 1e9-vertex mesh, would otherwise allocate gigabytes before
+// anyone sees an error).
+constexpr std::int64_t kMaxParticles = 1000000;
 
 // A bad scene key. what() names the key and the allowed range.
 class ConfigError : public std::runtime_error {
@@ -74,6 +81,12 @@ struct FrictionConfig {
 };
 
 struct ClothConfig {
+  // cloth.mesh: a triangle mesh file (OBJ) instead of the grid; rows, cols and spacing are then
+  // ignored. particle i = the file's vertex i, placed at origin + R(rpy) * mesh_scale * v.
+  std::string mesh;
+  double mesh_scale = 1.0;  // cloth.mesh_scale
+  // The loaded mesh (scene reader: scene_assets.h loadClothMesh). Shared, as obstacle meshes.
+  std::shared_ptr<const ClothMesh> mesh_data;
   int rows = 32;                                     // cloth.rows
   int cols = 32;                                     // cloth.cols
   double spacing = 0.03;                             // cloth.spacing (m)

@@ -73,7 +73,7 @@ class SelfCollision {
 
  private:
   void findVertexTrianglePairs(const Particles& particles, const ClothTopology& topology);
-  void findEdgeEdgePairs(const Particles& particles, int cols);
+  void findEdgeEdgePairs(const Particles& particles, const ClothTopology& topology);
 
   std::vector<std::array<int, 2>> edges_;
   SpatialHash triangle_hash_;

@@ -1,10 +1,16 @@
 #include "pbd_cloth/cloth_builder.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <functional>
+#include <limits>
 #include <map>
+#include <queue>
 #include <tuple>
 #include <utility>
+
+#include "pbd_cloth/cloth_mesh.h"
 
 namespace pbd_cloth {
 
@@ -117,6 +123,201 @@ void addBending(const Vec3Array& x, ClothTopology& topology) {
       [&key](const BendConstraint& a, const BendConstraint& b) { return key(a) < key(b); });
 }
 
+// --- Mesh cloths (cloth.mesh)
+// ----------------------------------------------------------------------
+
+// Frame of the triangle (x0, x1, x2) at its edge x0-x1: edge direction, in-plane normal to the
+// edge, triangle normal (the columns). `flip` mirrors the normal for the hinge's second triangle
+// (x0, x1, x3), so on a flat hinge both frames are the same.
+Eigen::Matrix3d hingeFrame(const Vec3& x0, const Vec3& x1, const Vec3& x2, bool flip) {
+  const Vec3 t = (x1 - x0).normalized();
+  Vec3 n = t.cross(x2 - x0).normalized();
+  if (flip) n = -n;
+  Eigen::Matrix3d frame;
+  frame.col(0) = t;
+  frame.col(1) = n.cross(t);
+  frame.col(2) = n;
+  return frame;
+}
+
+// Stretch along every edge of the triangles, once (sorted by vertex pair: a deterministic order).
+void addMeshStretch(const Vec3Array& x, ClothTopology& topology) {
+  std::vector<std::pair<int, int>> edges;
+  const auto& t = topology.triangles;
+  edges.reserve(t.size());
+  for (std::size_t k = 0; k < t.size(); k += 3) {
+    for (int e = 0; e < 3; ++e) {
+      const int a = static_cast<int>(t[k + e]), b = static_cast<int>(t[k + (e + 1) % 3]);
+      edges.emplace_back(std::min(a, b), std::max(a, b));
+    }
+  }
+  std::sort(edges.begin(), edges.end());
+  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+  for (const auto& [i, j] : edges) topology.stretch.push_back({i, j, (x[i] - x[j]).norm()});
+  topology.structural_count = static_cast<int>(topology.stretch.size());
+}
+
+// A hinge on every edge shared by exactly two triangles, at the mesh's own rest angle: the rest
+// mean-curvature vector b0 is kept in both triangles' frames (BendRest). Edges of more than two
+// triangles (non-manifold) get none: which pair of faces would bend is undefined.
+void addMeshBending(const Vec3Array& x, ClothTopology& topology) {
+  std::map<std::pair<unsigned, unsigned>, std::vector<int>> opposite;  // edge -> opposite vertices
+  const auto& t = topology.triangles;
+  for (std::size_t k = 0; k < t.size(); k += 3) {
+    for (int e = 0; e < 3; ++e) {
+      const unsigned a = t[k + e], b = t[k + (e + 1) % 3];
+      opposite[std::make_pair(std::min(a, b), std::max(a, b))].push_back(
+          static_cast<int>(t[k + (e + 2) % 3]));
+    }
+  }
+  for (const auto& [edge, opp] : opposite) {
+    if (opp.size() != 2) continue;  // boundary or non-manifold edge
+    const int i0 = static_cast<int>(edge.first), i1 = static_cast<int>(edge.second);
+    BendConstraint bend;
+    if (!makeBendConstraint(x, i0, i1, opp[0], opp[1], bend)) continue;
+    BendRest rest;
+    const Vec3 b0 = bend.weight[1] * (x[i1] - x[i0]) + bend.weight[2] * (x[opp[0]] - x[i0]) +
+                    bend.weight[3] * (x[opp[1]] - x[i0]);
+    // Flat within rounding (relative to the edge): the grid's C = scale b, no frames needed.
+    if (b0.norm() > 1e-9 * (x[i1] - x[i0]).norm()) {
+      rest.curved = true;
+      rest.in_first = hingeFrame(x[i0], x[i1], x[opp[0]], false).transpose() * b0;
+      rest.in_second = hingeFrame(x[i0], x[i1], x[opp[1]], true).transpose() * b0;
+    }
+    topology.bend.push_back(bend);
+    topology.bend_rest.push_back(rest);
+  }
+}
+
+// For each particle, the particles that share a triangle or a hinge with it (sorted).
+void addMeshNeighbours(int count, ClothTopology& topology) {
+  std::vector<std::vector<int>> near(count);
+  const auto& t = topology.triangles;
+  for (std::size_t k = 0; k < t.size(); k += 3) {
+    for (int a = 0; a < 3; ++a) {
+      for (int b = 0; b < 3; ++b) {
+        if (a != b) near[t[k + a]].push_back(static_cast<int>(t[k + b]));
+      }
+    }
+  }
+  // The opposite corners of each pair of triangles sharing an edge (with or without bending).
+  std::vector<std::array<int, 3>> sides;  // edge (a, b), opposite corner
+  sides.reserve(t.size());
+  for (std::size_t k = 0; k < t.size(); k += 3) {
+    for (int e = 0; e < 3; ++e) {
+      const int a = static_cast<int>(t[k + e]), b = static_cast<int>(t[k + (e + 1) % 3]);
+      sides.push_back({std::min(a, b), std::max(a, b), static_cast<int>(t[k + (e + 2) % 3])});
+    }
+  }
+  std::sort(sides.begin(), sides.end());
+  for (std::size_t k = 0; k < sides.size();) {
+    std::size_t end = k + 1;
+    while (end < sides.size() && sides[end][0] == sides[k][0] && sides[end][1] == sides[k][1]) {
+      ++end;
+    }
+    for (std::size_t u = k; u < end; ++u) {
+      for (std::size_t v = k; v < end; ++v) {
+        if (u != v) near[sides[u][2]].push_back(sides[v][2]);
+      }
+    }
+    k = end;
+  }
+  topology.near_offsets.assign(1, 0);
+  topology.near_list.clear();
+  for (auto& list : near) {
+    std::sort(list.begin(), list.end());
+    list.erase(std::unique(list.begin(), list.end()), list.end());
+    topology.near_list.insert(topology.near_list.end(), list.begin(), list.end());
+    topology.near_offsets.push_back(static_cast<int>(topology.near_list.size()));
+  }
+}
+
+// Particles at the file's vertices placed by origin, rpy and mesh_scale; masses lumped from the
+// triangle areas (each triangle gives a third of its share of cloth.mass to each corner), so an
+// irregular mesh carries its mass where its area is, as the grid does.
+void placeMeshParticles(const ClothConfig& cloth, const ClothMesh& mesh, Particles& particles) {
+  const Eigen::Matrix3d rotation = rotationFromRpy(cloth.rpy);
+  const int count = static_cast<int>(mesh.vertices.size());
+  for (int i = 0; i < count; ++i) {
+    particles.position[i] = cloth.origin + rotation * (cloth.mesh_scale * mesh.vertices[i]);
+    particles.mass[i] = 0.0;
+    particles.radius[i] = cloth.thickness;
+  }
+  const auto& t = mesh.triangles;
+  double total_area = 0.0;
+  std::vector<double> area(t.size() / 3);
+  for (std::size_t k = 0; k < area.size(); ++k) {
+    const Vec3& a = mesh.vertices[t[3 * k]];
+    area[k] = 0.5 * (mesh.vertices[t[3 * k + 1]] - a).cross(mesh.vertices[t[3 * k + 2]] - a).norm();
+    total_area += area[k];
+  }
+  for (std::size_t k = 0; k < area.size(); ++k) {
+    const double share = cloth.mass * area[k] / total_area / 3.0;
+    for (int c = 0; c < 3; ++c) particles.mass[t[3 * k + c]] += share;
+  }
+}
+
+// Graph distances along the mesh edges (rest lengths) from `source`: Dijkstra.
+void edgeDistances(int source, const std::vector<int>& offsets, const std::vector<int>& targets,
+                   const std::vector<double>& lengths, std::vector<double>& distance) {
+  distance.assign(offsets.size() - 1, std::numeric_limits<double>::infinity());
+  using Entry = std::pair<double, int>;
+  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
+  distance[source] = 0.0;
+  queue.emplace(0.0, source);
+  while (!queue.empty()) {
+    const auto [d, v] = queue.top();
+    queue.pop();
+    if (d > distance[v]) continue;
+    for (int k = offsets[v]; k < offsets[v + 1]; ++k) {
+      const double next = d + lengths[k];
+      if (next < distance[targets[k]]) {
+        distance[targets[k]] = next;
+        queue.emplace(next, targets[k]);
+      }
+    }
+  }
+}
+
+// Tethers of a mesh cloth: the rest distance is the shortest path along the mesh edges, an upper
+// bound of the geodesic on the surface (a zig-zag of edges is longer than the straight path
+// across the triangles). Straight distance would be wrong for a curved or folded garment: the two
+// layers of a T-shirt are 2 cm apart in space but half a shirt apart along the cloth.
+void buildMeshTethers(const Particles& particles, const ClothTopology& topology,
+                      std::vector<Tether>& tethers) {
+  const int n = particles.cloth_count;
+  std::vector<int> anchors;
+  for (int i = 0; i < n; ++i) {
+    if (particles.isKinematic(i)) anchors.push_back(i);
+  }
+  if (anchors.empty()) return;
+  std::vector<int> offsets(n + 1, 0);
+  for (const DistanceConstraint& c : topology.stretch) {
+    ++offsets[c.i + 1];
+    ++offsets[c.j + 1];
+  }
+  for (int i = 0; i < n; ++i) offsets[i + 1] += offsets[i];
+  std::vector<int> fill(offsets.begin(), offsets.end() - 1), targets(offsets[n]);
+  std::vector<double> lengths(offsets[n]);
+  for (const DistanceConstraint& c : topology.stretch) {
+    targets[fill[c.i]] = c.j;
+    lengths[fill[c.i]++] = c.rest_length;
+    targets[fill[c.j]] = c.i;
+    lengths[fill[c.j]++] = c.rest_length;
+  }
+  std::vector<std::vector<double>> distance(anchors.size());
+  for (std::size_t a = 0; a < anchors.size(); ++a) {
+    edgeDistances(anchors[a], offsets, targets, lengths, distance[a]);
+  }
+  // Grouped by particle, as projectTethers expects; a part not connected to an anchor gets none.
+  for (int i = 0; i < n; ++i) {
+    if (particles.isKinematic(i)) continue;
+    for (std::size_t a = 0; a < anchors.size(); ++a) {
+      if (std::isfinite(distance[a][i])) tethers.push_back({i, anchors[a], distance[a][i]});
+    }
+  }
+}
+
 }  // namespace
 
 bool makeBendConstraint(const Vec3Array& rest, int i0, int i1, int i2, int i3,
@@ -147,22 +348,28 @@ bool makeBendConstraint(const Vec3Array& rest, int i0, int i1, int i2, int i3,
 void buildScene(const SceneConfig& scene, Particles& particles, ClothTopology& topology) {
   const ClothConfig& cloth = scene.cloth;
   const GranularConfig& granular = scene.granular;
-  const int cloth_count = cloth.rows * cloth.cols;
+  const ClothMesh* mesh = cloth.mesh.empty() ? nullptr : cloth.mesh_data.get();
+  const int cloth_count = mesh ? static_cast<int>(mesh->vertices.size()) : cloth.rows * cloth.cols;
   particles.resize(cloth_count + granular.count);
   particles.cloth_count = cloth_count;
   topology = ClothTopology();
-  topology.rows = cloth.rows;
-  topology.cols = cloth.cols;
 
-  const Eigen::Matrix3d rotation = rotationFromRpy(cloth.rpy);
-  const double particle_mass = cloth.mass / cloth_count;
-  for (int r = 0; r < cloth.rows; ++r) {
-    for (int c = 0; c < cloth.cols; ++c) {
-      const int i = r * cloth.cols + c;
-      particles.position[i] =
-          cloth.origin + rotation * Vec3(c * cloth.spacing, -r * cloth.spacing, 0.0);
-      particles.mass[i] = particle_mass;
-      particles.radius[i] = cloth.thickness;
+  if (mesh) {
+    topology.from_mesh = true;
+    placeMeshParticles(cloth, *mesh, particles);
+  } else {
+    topology.rows = cloth.rows;
+    topology.cols = cloth.cols;
+    const Eigen::Matrix3d rotation = rotationFromRpy(cloth.rpy);
+    const double particle_mass = cloth.mass / cloth_count;
+    for (int r = 0; r < cloth.rows; ++r) {
+      for (int c = 0; c < cloth.cols; ++c) {
+        const int i = r * cloth.cols + c;
+        particles.position[i] =
+            cloth.origin + rotation * Vec3(c * cloth.spacing, -r * cloth.spacing, 0.0);
+        particles.mass[i] = particle_mass;
+        particles.radius[i] = cloth.thickness;
+      }
     }
   }
   for (const auto& [index, kg] : cloth.point_masses) particles.mass[index] = kg;
@@ -189,15 +396,26 @@ void buildScene(const SceneConfig& scene, Particles& particles, ClothTopology& t
   particles.kinematic_from = particles.position;
   particles.kinematic_to = particles.position;
 
-  addTriangles(cloth, topology);
-  addStretch(cloth, particles.position, topology);
-  if (cloth.bend_compliance >= 0.0) addBending(particles.position, topology);
+  if (mesh) {
+    topology.triangles = mesh->triangles;
+    addMeshStretch(particles.position, topology);
+    if (cloth.bend_compliance >= 0.0) addMeshBending(particles.position, topology);
+    addMeshNeighbours(cloth_count, topology);
+  } else {
+    addTriangles(cloth, topology);
+    addStretch(cloth, particles.position, topology);
+    if (cloth.bend_compliance >= 0.0) addBending(particles.position, topology);
+  }
   if (cloth.tethers) buildTethers(particles, topology, cloth.spacing, topology.tethers);
 }
 
 void buildTethers(const Particles& particles, const ClothTopology& topology, double spacing,
                   std::vector<Tether>& tethers) {
   tethers.clear();
+  if (topology.from_mesh) {
+    buildMeshTethers(particles, topology, tethers);
+    return;
+  }
   std::vector<int> anchors;
   for (int i = 0; i < particles.cloth_count; ++i) {
     if (particles.isKinematic(i)) anchors.push_back(i);

@@ -1,5 +1,7 @@
 #include "pbd_cloth/particles.h"
 
+#include <algorithm>
+
 namespace pbd_cloth {
 
 void Particles::resize(int n) {
@@ -12,6 +14,14 @@ void Particles::resize(int n) {
   mass.assign(n, 0.0);
   inverse_mass.assign(n, 0.0);
   radius.assign(n, 0.0);
+}
+
+bool ClothTopology::meshNear(int a, int b) const {
+  if (a == b) return true;
+  if (near_offsets.empty()) return false;
+  const auto begin = near_list.begin() + near_offsets[a],
+             end = near_list.begin() + near_offsets[a + 1];
+  return std::binary_search(begin, end, b);
 }
 
 }  // namespace pbd_cloth

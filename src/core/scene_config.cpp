@@ -4,6 +4,8 @@
 // with everything and would otherwise slip through a range test.
 #include "pbd_cloth/scene_config.h"
 
+#include "pbd_cloth/cloth_mesh.h"
+
 #include <cctype>
 #include <cmath>
 #include <cstdint>
@@ -61,7 +63,6 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // Upper limits that are not physics but protect the process: a typo like rows: 50000 would
 // otherwise allocate gigabytes before anyone sees an error.
 constexpr int kMaxPasses = 1000;
-constexpr std::int64_t kMaxParticles = 1000000;
 
 std::string formatNumber(double value) {
   std::ostringstream out;
@@ -199,15 +200,27 @@ void validateSolver(const SolverConfig& s) {
 }
 
 void validateCloth(const ClothConfig& c) {
-  checkInteger("cloth.rows", c.rows, 1, kMaxParticles);
-  checkInteger("cloth.cols", c.cols, 1, kMaxParticles);
-  const std::int64_t count = static_cast<std::int64_t>(c.rows) * c.cols;
-  if (count < 2 || count > kMaxParticles) {
-    throw ConfigError("cloth.rows", "rows * cols must be in [2, " + std::to_string(kMaxParticles) +
-                                        "], got " + std::to_string(c.rows) + " * " +
-                                        std::to_string(c.cols) + " = " + std::to_string(count));
+  std::int64_t count = 0;
+  if (!c.mesh.empty()) {
+    // rows, cols and spacing are ignored with a mesh, so not checked.
+    if (!c.mesh_data) {
+      throw ConfigError("cloth.mesh",
+                        "'" + c.mesh + "' is not loaded (the scene reader loads it: loadScene)");
+    }
+    checkNumber("cloth.mesh_scale", c.mesh_scale, kPositive);
+    count = static_cast<std::int64_t>(c.mesh_data->vertices.size());
+  } else {
+    checkInteger("cloth.rows", c.rows, 1, kMaxParticles);
+    checkInteger("cloth.cols", c.cols, 1, kMaxParticles);
+    count = static_cast<std::int64_t>(c.rows) * c.cols;
+    if (count < 2 || count > kMaxParticles) {
+      throw ConfigError("cloth.rows", "rows * cols must be in [2, " +
+                                          std::to_string(kMaxParticles) + "], got " +
+                                          std::to_string(c.rows) + " * " + std::to_string(c.cols) +
+                                          " = " + std::to_string(count));
+    }
+    checkNumber("cloth.spacing", c.spacing, kPositive);
   }
-  checkNumber("cloth.spacing", c.spacing, kPositive);
   checkNumber("cloth.mass", c.mass, kPositive);
   checkFinite("cloth.origin", c.origin);
   checkFinite("cloth.rpy", c.rpy);

@@ -155,7 +155,7 @@ void SelfCollision::findPairs(const Particles& p, const ClothTopology& topology,
     grown_hi_[v] = hi[v].array() + half;
   }
   if (edge_pairs) {
-    findEdgeEdgePairs(p, topology.cols);
+    findEdgeEdgePairs(p, topology);
     edge_pair_count_ = static_cast<int>(pairs_.size());
   }
   findVertexTrianglePairs(p, topology);
@@ -198,11 +198,15 @@ void SelfCollision::findVertexTrianglePairs(const Particles& p, const ClothTopol
   }
 }
 
-void SelfCollision::findEdgeEdgePairs(const Particles& p, int cols) {
+void SelfCollision::findEdgeEdgePairs(const Particles& p, const ClothTopology& topology) {
   // Edges of one grid cell or of neighbouring cells (some end points within one row and column)
   // are left out: nearly coplanar while the cloth is smooth, they would get a side by chance, and
   // folding them onto each other is already stopped by the vertex-triangle contacts.
-  auto near = [cols](int u, int v) {
+  // A mesh cloth: the particles sharing a triangle or a hinge, which on a grid are exactly these.
+  const int cols = topology.cols;
+  const bool mesh = topology.from_mesh;
+  auto near = [cols, mesh, &topology](int u, int v) {
+    if (mesh) return topology.meshNear(u, v);
     const int dr = u / cols - v / cols, dc = u % cols - v % cols;
     return dr >= -1 && dr <= 1 && dc >= -1 && dc <= 1;
   };

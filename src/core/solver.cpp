@@ -31,6 +31,29 @@ Vec3 bendVector(const BendConstraint& con, const Particles& p) {
          con.weight[3] * (p.position[con.index[3]] - x0);
 }
 
+// The rest bending vector of a curved mesh hinge carried into the current positions: b0 = sum of
+// its components along each triangle's current frame (edge, in-plane normal, normal), averaged
+// over the two triangles so neither is preferred. Treated as fixed within one projection (its
+// dependence on the positions is left out of the gradient): the constraint stays linear with the
+// vector multiplier of the flat model, and at the rest shape, in any pose, b = b0' exactly.
+Vec3 restBendVector(const BendConstraint& con, const BendRest& rest, const Particles& p) {
+  const Vec3& x0 = p.position[con.index[0]];
+  const Vec3 edge = p.position[con.index[1]] - x0;
+  const double length = edge.norm();
+  if (!(length > kMinLength)) return Vec3::Zero();
+  const Vec3 t = edge / length;
+  Vec3 target = Vec3::Zero();
+  for (int side = 0; side < 2; ++side) {
+    Vec3 n = t.cross(p.position[con.index[2 + side]] - x0);
+    const double norm = n.norm();
+    if (!(norm > kMinLength * length)) continue;  // collapsed triangle: no frame this time
+    n /= side == 0 ? norm : -norm;
+    const Vec3& c = side == 0 ? rest.in_first : rest.in_second;
+    target += 0.5 * (c.x() * t + c.y() * n.cross(t) + c.z() * n);
+  }
+  return target;
+}
+
 }  // namespace
 
 void Solver::configure(const SolverConfig& solver, const ClothConfig& cloth) {
@@ -161,6 +184,7 @@ double Solver::projectBend(double h, Particles& p, const ClothTopology& topology
   const double k = xpbd ? 1.0 : pbdStiffness(config_.bend_stiffness);
   double max_change = 0.0;
   const int count = static_cast<int>(topology.bend.size());
+  const bool has_rest = !topology.bend_rest.empty();
   for (int c = 0; c < count; ++c) {
     const BendConstraint& con = topology.bend[c];
     double w = 0.0;
@@ -175,7 +199,12 @@ double Solver::projectBend(double h, Particles& p, const ClothTopology& topology
     // direction of its accumulated force instead of flipping the sign of a scalar lambda, and no
     // |b| is divided by. XPBD: dlambda = (-C - alpha lambda) / (w + alpha) (Macklin et al. 2016,
     // eq. 18), row by row with the common w.
-    const Vec3 constraint = con.scale * bendVector(con, p);
+    // Mesh hinges with a curved rest shape: C = scale (b - b0'), b0' the rest vector in the
+    // hinge's current frames (restBendVector); flat hinges and the grid: C = scale b.
+    const Vec3 constraint =
+        has_rest && topology.bend_rest[c].curved
+            ? Vec3(con.scale * (bendVector(con, p) - restBendVector(con, topology.bend_rest[c], p)))
+            : Vec3(con.scale * bendVector(con, p));
     Vec3 dlambda = xpbd ? Vec3((-constraint - alpha * bend_lambda_[c]) / (w + alpha))
                         : Vec3((-k / w) * constraint);
     if (average) {
@@ -393,8 +422,12 @@ void Solver::massSpringSubstep(double h, double s_end, Particles& p, const Cloth
   }
   if (bend_compliance_ >= 0.0) {
     // Bending springs on the isometric energy E = k_b / 2 scale^2 |b|^2: F_k = -k_b scale^2 K_k b.
-    for (const BendConstraint& con : topology.bend) {
-      const Vec3 b = bendVector(con, p);
+    const bool has_rest = !topology.bend_rest.empty();
+    for (std::size_t c = 0; c < topology.bend.size(); ++c) {
+      const BendConstraint& con = topology.bend[c];
+      const Vec3 b = has_rest && topology.bend_rest[c].curved
+                         ? Vec3(bendVector(con, p) - restBendVector(con, topology.bend_rest[c], p))
+                         : bendVector(con, p);
       if (b.norm() < kMinLength) continue;  // flat: no force but rounding noise
       const Vec3 f = -config_.bend_spring_stiffness * con.scale * con.scale * b;
       for (int v = 0; v < 4; ++v) force_[con.index[v]] += con.weight[v] * f;

@@ -4,11 +4,14 @@
 // displays in rviz loads here too. No ROS master is involved.
 #include "pbd_cloth/scene_assets.h"
 
+#include "pbd_cloth/cloth_mesh.h"
+
 #include <assimp/config.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <console_bridge/console.h>
 #include <resource_retriever/retriever.h>
+#include <tiny_obj_loader.h>
 #include <tinyxml2.h>
 #include <urdf/model.h>
 #include <assimp/Importer.hpp>
@@ -432,6 +435,94 @@ std::shared_ptr<const TriangleMesh> loadMesh(const std::string& uri, const Eigen
                        " open boundary edges: handled as a two-sided shell (no inside)");
   }
   return mesh;
+}
+
+namespace {
+
+// The file lines of the faces tinyobjloader returns (f lines with at least 3 vertices, in order),
+// counted in one pass that keeps nothing else, so the vertex count is known before the file is
+// parsed. Stops (ConfigError) as soon as there are more v lines than a cloth may have particles.
+std::vector<int> scanObj(std::istream& in, const std::string& key, const std::string& named) {
+  std::vector<int> face_lines;
+  std::string line;
+  std::int64_t vertices = 0;
+  int number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    const std::size_t start = line.find_first_not_of(" \t");
+    if (start == std::string::npos || start + 1 >= line.size()) continue;
+    const char kind = line[start], next = line[start + 1];
+    if (next != ' ' && next != '\t') continue;
+    if (kind == 'v' && ++vertices > kMaxParticles) {
+      throw ConfigError(key, named + " has more than " + std::to_string(kMaxParticles) +
+                                 " vertices (line " + std::to_string(number) +
+                                 "), the most particles a cloth may have");
+    }
+    if (kind == 'f') {
+      std::istringstream tokens(line.substr(start + 1));
+      std::string token;
+      int count = 0;
+      while (tokens >> token) ++count;
+      if (count >= 3) face_lines.push_back(number);
+    }
+  }
+  return face_lines;
+}
+
+}  // namespace
+
+void loadClothMesh(SceneConfig& scene) {
+  ClothConfig& cloth = scene.cloth;
+  const std::string key = "cloth.mesh";
+  const std::string named = "cloth mesh '" + cloth.mesh + "'";
+  if (extensionOf(cloth.mesh) != "obj") {
+    throw ConfigError(key, named + ": must be a Wavefront OBJ file (.obj)");
+  }
+  // Plain paths are scanned from the file itself; URIs (package://, file://) are read into memory
+  // by resource_retriever first, as obstacle meshes are.
+  std::unique_ptr<std::istream> in;
+  if (isUri(cloth.mesh)) {
+    in = std::make_unique<std::istringstream>(readLocation(cloth.mesh, key, "cloth mesh"));
+  } else {
+    std::error_code error;
+    if (!std::filesystem::is_regular_file(cloth.mesh, error)) {
+      throw ConfigError(key, named + " not found (or not a file)");
+    }
+    auto file = std::make_unique<std::ifstream>(cloth.mesh, std::ios::binary);
+    if (!file->is_open()) throw ConfigError(key, named + " cannot be opened (permissions?)");
+    in = std::move(file);
+  }
+  PolygonMesh polygons;
+  polygons.source = cloth.mesh;
+  polygons.face_lines = scanObj(*in, key, named);
+  in->clear();
+  in->seekg(0);
+
+  tinyobj::attrib_t attrib;
+  std::vector<tinyobj::shape_t> shapes;
+  std::vector<tinyobj::material_t> materials;
+  std::string warn, err;
+  // No triangulation by the loader: faces arrive as written, so polygons are reported by face.
+  // No material reader: a cloth needs none, and a missing .mtl must not stop the load.
+  if (!tinyobj::LoadObj(&attrib, &shapes, &materials, &warn, &err, in.get(), nullptr, false)) {
+    throw ConfigError(key, named + " does not parse: " + err);
+  }
+  const std::size_t count = attrib.vertices.size() / 3;
+  polygons.vertices.resize(count);
+  for (std::size_t v = 0; v < count; ++v) {
+    polygons.vertices[v] =
+        Vec3(attrib.vertices[3 * v], attrib.vertices[3 * v + 1], attrib.vertices[3 * v + 2]);
+  }
+  // Groups (o, g lines) become shapes in file order: their faces, concatenated, are the file's.
+  for (const tinyobj::shape_t& shape : shapes) {
+    for (unsigned char size : shape.mesh.num_face_vertices) polygons.face_sizes.push_back(size);
+    for (const tinyobj::index_t& index : shape.mesh.indices) {
+      polygons.face_indices.push_back(index.vertex_index);
+    }
+  }
+  if (polygons.face_lines.size() != polygons.face_sizes.size()) polygons.face_lines.clear();
+  cloth.mesh_data =
+      std::make_shared<const ClothMesh>(makeClothMesh(polygons, key, scene.load_warnings));
 }
 
 void loadObstacleMeshes(SceneConfig& scene) {

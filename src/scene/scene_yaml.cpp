@@ -241,10 +241,12 @@ void readSolver(const YAML::Node& node, SolverConfig& s) {
 }
 
 void readCloth(const YAML::Node& node, ClothConfig& c) {
-  const MapReader map(
-      node, "cloth",
-      {"rows", "cols", "spacing", "mass", "origin", "rpy", "stretch_compliance", "bend_compliance",
-       "thickness", "self_collision", "friction", "pinned", "point_masses", "tethers", "shear"});
+  const MapReader map(node, "cloth",
+                      {"mesh", "mesh_scale", "rows", "cols", "spacing", "mass", "origin", "rpy",
+                       "stretch_compliance", "bend_compliance", "thickness", "self_collision",
+                       "friction", "pinned", "point_masses", "tethers", "shear"});
+  map.read("mesh", c.mesh);
+  map.read("mesh_scale", c.mesh_scale);
   map.read("rows", c.rows);
   map.read("cols", c.cols);
   map.read("spacing", c.spacing);
@@ -496,6 +498,8 @@ SceneConfig sceneFromYaml(const YAML::Node& root, const std::string& base_direct
     if (o.shape == ShapeType::kMesh) o.mesh = resolveScenePath(o.mesh, base_directory);
   }
   scene.robot.urdf_file = resolveScenePath(scene.robot.urdf_file, base_directory);
+  scene.cloth.mesh = resolveScenePath(scene.cloth.mesh, base_directory);
+  if (!scene.cloth.mesh.empty()) loadClothMesh(scene);
   loadObstacleMeshes(scene);
   if (!scene.robot.urdf_file.empty()) loadRobotFile(scene);
   validate(scene);

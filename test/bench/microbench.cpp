@@ -15,6 +15,8 @@
 
 #include <chrono>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -22,6 +24,7 @@
 #include "../core/mesh_builders.h"
 #include "pbd_cloth/cloth_builder.h"
 #include "pbd_cloth/collisions.h"
+#include "pbd_cloth/scene_assets.h"
 #include "pbd_cloth/scene_yaml.h"
 #include "pbd_cloth/simulation.h"
 #include "pbd_cloth/solver.h"
@@ -242,6 +245,50 @@ void BM_MeshBuild(benchmark::State& state) {
 
 // Particle pairs: 1000 granular particles of 1 cm on a lattice squeezed to 90 % of its pitch, so
 // neighbours overlap by 0.2 r. ns per particle per pass (all its pair tests).
+// cloth.mesh at load: reading a 142 x 142 = 20,164-vertex OBJ (tinyobjloader, with the line scan
+// and the checks of makeClothMesh) and building the simulation from it (masses, edges, hinges,
+// neighbour lists, solver and collision buffers, self-collision on). The file is written once.
+void BM_ClothMeshLoadAndBuild(benchmark::State& state) {
+  const int n = 142;
+  const std::string path =
+      (std::filesystem::temp_directory_path() / "pbd_cloth_bench_20k.obj").string();
+  {
+    std::ofstream obj(path);
+    for (int r = 0; r < n; ++r) {
+      for (int c = 0; c < n; ++c) obj << "v " << c * 0.01 << " " << -r * 0.01 << " 0\n";
+    }
+    for (int r = 0; r + 1 < n; ++r) {
+      for (int c = 0; c + 1 < n; ++c) {
+        const int a = r * n + c + 1, b = a + 1, d = a + n, e = d + 1;
+        obj << "f " << a << " " << d << " " << e << "\nf " << a << " " << e << " " << b << "\n";
+      }
+    }
+  }
+  double load_seconds = 0.0, build_seconds = 0.0, grid_seconds = 0.0;
+  for (auto _ : state) {
+    // For comparison: the grid of the same size built from rows and cols.
+    SceneConfig grid;
+    grid.cloth.rows = grid.cloth.cols = n;
+    grid.cloth.pinned.clear();
+    const auto g0 = std::chrono::steady_clock::now();
+    Simulation grid_sim(grid);
+    grid_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - g0).count();
+    SceneConfig scene;
+    scene.cloth.mesh = path;
+    const auto t0 = std::chrono::steady_clock::now();
+    loadClothMesh(scene);
+    const auto t1 = std::chrono::steady_clock::now();
+    Simulation sim(scene);
+    const auto t2 = std::chrono::steady_clock::now();
+    benchmark::DoNotOptimize(sim.particles().position.data());
+    load_seconds += std::chrono::duration<double>(t1 - t0).count();
+    build_seconds += std::chrono::duration<double>(t2 - t1).count();
+  }
+  state.counters["load_ms"] = 1e3 * load_seconds / state.iterations();
+  state.counters["build_ms"] = 1e3 * build_seconds / state.iterations();
+  state.counters["grid_build_ms"] = 1e3 * grid_seconds / state.iterations();
+}
+
 void BM_ParticlePairs(benchmark::State& state) {
   SceneConfig scene = clothScene(Method::kXpbd, 1, false);
   scene.cloth.rows = 1;
@@ -366,6 +413,7 @@ BENCHMARK(BM_MeshSphereCollision)
     ->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_MeshSignedDistance)->ArgName("level")->Arg(3)->Arg(5)->Unit(benchmark::kNanosecond);
 BENCHMARK(BM_MeshBuild)->ArgName("level")->Arg(3)->Arg(5)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ClothMeshLoadAndBuild)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ParticlePairs)->UseManualTime()->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_SelfCollision)->UseManualTime()->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_SelfCollisionBroadPhase)->UseManualTime()->Unit(benchmark::kMicrosecond);

@@ -1,0 +1,355 @@
+// cloth.mesh: OBJ cloths keeping the file's vertex ids. Positions at t = 0 are the file's vertices
+// placed by origin, rpy and mesh_scale; an irregular mesh of a square hangs like the grid; a
+// curved rest shape is kept; every bad mesh gets the documented result and a message naming the
+// face or vertex; the shipped T-shirt keeps its layers apart on a table.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "pbd_cloth/cloth_builder.h"
+#include "pbd_cloth/cloth_mesh.h"
+#include "pbd_cloth/metrics.h"
+#include "pbd_cloth/scene_assets.h"
+#include "pbd_cloth/scene_yaml.h"
+#include "pbd_cloth/simulation.h"
+#include "test_scenes.h"
+
+namespace pbd_cloth {
+namespace {
+
+const std::string kSourceDirectory = PBD_CLOTH_SOURCE_DIR;
+
+// Writes `text` to a file of that name in the test's temporary directory; returns its path.
+std::string writeObj(const std::string& name, const std::string& text) {
+  const std::string path = (std::filesystem::temp_directory_path() / name).string();
+  std::ofstream(path) << text;
+  return path;
+}
+
+// A scene with the cloth from `path` (no gravity change: the defaults of clothScene).
+SceneConfig meshScene(const std::string& path) {
+  SceneConfig scene = test::clothScene(2, 2, 0.1, Method::kXpbd);
+  scene.cloth.mesh = path;
+  loadClothMesh(scene);
+  return scene;
+}
+
+// The ConfigError message of loading the OBJ `text`, or "" when it loads.
+std::string errorOf(const std::string& name, const std::string& text) {
+  try {
+    meshScene(writeObj(name, text));
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// The warnings of loading the OBJ `text` (which must load).
+std::vector<std::string> warningsOf(const std::string& name, const std::string& text,
+                                    SceneConfig* out = nullptr) {
+  SceneConfig scene = meshScene(writeObj(name, text));
+  if (out) *out = scene;
+  return scene.load_warnings;
+}
+
+bool contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+// The v lines of an OBJ file, read here without tinyobjloader.
+Vec3Array objVertices(const std::string& path) {
+  Vec3Array out;
+  std::ifstream in(path);
+  std::string line;
+  while (std::getline(in, line)) {
+    std::istringstream tokens(line);
+    std::string kind;
+    double x, y, z;
+    if (tokens >> kind && kind == "v" && tokens >> x >> y >> z) out.emplace_back(x, y, z);
+  }
+  return out;
+}
+
+TEST(ClothMesh, ParticleIIsTheFilesVertexIPlacedByOriginRpyAndScale) {
+  const std::string path = kSourceDirectory + "/config/meshes/tshirt.obj";
+  SceneConfig scene = meshScene(path);
+  scene.cloth.origin = Vec3(0.3, -1.2, 2.0);
+  scene.cloth.rpy = Vec3(0.4, -0.7, 1.1);
+  scene.cloth.mesh_scale = 1.7;
+  const Simulation sim(scene);
+  const Vec3Array file = objVertices(path);
+  ASSERT_EQ(sim.particles().cloth_count, static_cast<int>(file.size()));
+  const Eigen::Matrix3d rotation = rotationFromRpy(scene.cloth.rpy);
+  double worst = 0.0;
+  for (std::size_t i = 0; i < file.size(); ++i) {
+    const Vec3 expected = scene.cloth.origin + rotation * (1.7 * file[i]);
+    worst = std::max(worst, (sim.particles().position[i] - expected).norm());
+  }
+  EXPECT_LT(worst, 1e-14);  // the same arithmetic on the same doubles: rounding only
+  // Triangles are the faces in file order, 0-based.
+  std::ifstream in(path);
+  std::string line;
+  std::vector<unsigned> faces;
+  while (std::getline(in, line)) {
+    std::istringstream tokens(line);
+    std::string kind;
+    unsigned a, b, c;
+    if (tokens >> kind && kind == "f" && tokens >> a >> b >> c) {
+      faces.insert(faces.end(), {a - 1, b - 1, c - 1});
+    }
+  }
+  EXPECT_EQ(sim.topology().triangles, faces);
+}
+
+// A square of n x n particles at pitch s in the grid's layout (particle r * n + c at
+// (c s, -r s, 0)); interior vertices moved by up to `jitter` s, every cell split along the
+// other diagonal than the grid's checkerboard where `flip` says so.
+std::string squareObj(int n, double s, double jitter, unsigned seed) {
+  std::mt19937 random(seed);
+  std::uniform_real_distribution<double> offset(-jitter, jitter);
+  std::ostringstream obj;
+  obj.precision(17);
+  for (int r = 0; r < n; ++r) {
+    for (int c = 0; c < n; ++c) {
+      const bool interior = r > 0 && c > 0 && r + 1 < n && c + 1 < n;
+      const double dx = interior ? offset(random) : 0.0, dy = interior ? offset(random) : 0.0;
+      obj << "v " << (c + dx) * s << " " << -(r + dy) * s << " 0\n";
+    }
+  }
+  std::bernoulli_distribution flip(0.5);
+  for (int r = 0; r + 1 < n; ++r) {
+    for (int c = 0; c + 1 < n; ++c) {
+      const int a = r * n + c + 1, b = a + 1, d = a + n, e = d + 1;  // 1-based
+      if (flip(random)) {
+        obj << "f " << a << " " << d << " " << e << "\nf " << a << " " << e << " " << b << "\n";
+      } else {
+        obj << "f " << a << " " << d << " " << b << "\nf " << b << " " << d << " " << e << "\n";
+      }
+    }
+  }
+  return obj.str();
+}
+
+// Height of the centre of mass after 4 s hanging from the two top corners.
+double hangingCentreOfMass(SceneConfig scene) {
+  scene.solver.substeps = 20;
+  scene.solver.damping = 1.0;
+  scene.cloth.mass = 0.2;
+  scene.cloth.bend_compliance = 1.0;
+  Simulation sim(scene);
+  for (int k = 0; k < 240; ++k) sim.step();
+  const Particles& p = sim.particles();
+  double mass = 0.0, height = 0.0;
+  for (int i = 0; i < p.cloth_count; ++i) {
+    mass += p.mass[i];
+    height += p.mass[i] * p.position[i].z();
+  }
+  EXPECT_NEAR(mass, 0.2, 1e-12);
+  return height / mass;
+}
+
+TEST(ClothMesh, IrregularSquareHangsWithTheGridsSag) {
+  const int n = 15;
+  const double s = 0.04;
+  SceneConfig grid = test::clothScene(n, n, s, Method::kXpbd);
+  grid.cloth.pinned = {0, n - 1};
+  const double grid_height = hangingCentreOfMass(grid);
+  SceneConfig mesh = meshScene(writeObj("irregular_square.obj", squareObj(n, s, 0.3, 7)));
+  mesh.cloth.pinned = {0, n - 1};
+  const double mesh_height = hangingCentreOfMass(mesh);
+  // The sag (drop of the centre of mass below the pins; the cloth starts flat at their height)
+  // within 3 %: masses lumped from the areas put the mass where the cloth is, as the grid does.
+  const double grid_sag = -grid_height, mesh_sag = -mesh_height;
+  ASSERT_GT(grid_sag, 0.05);
+  EXPECT_NEAR(mesh_sag, grid_sag, 0.03 * grid_sag) << "grid " << grid_sag << ", mesh " << mesh_sag;
+}
+
+TEST(ClothMesh, TethersFollowTheMeshNotTheStraightLine) {
+  // Along the edges: at least the straight distance, and on a flat square at most the detour of
+  // the edges: sqrt(2) to the corner of a cell across the other diagonal, plus the jitter.
+  const int n = 10;
+  SceneConfig scene = meshScene(writeObj("tether_square.obj", squareObj(n, 0.05, 0.2, 3)));
+  scene.cloth.pinned = {0, n - 1};
+  scene.cloth.tethers = true;
+  const Simulation sim(scene);
+  const auto& tethers = sim.topology().tethers;
+  ASSERT_EQ(tethers.size(), 2u * (n * n - 2));
+  for (const Tether& t : tethers) {
+    const double straight =
+        (sim.particles().position[t.particle] - sim.particles().position[t.anchor]).norm();
+    EXPECT_GE(t.max_length, straight * (1.0 - 1e-12));
+    EXPECT_LE(t.max_length, 1.6 * straight + 1e-12);
+  }
+  // On the T-shirt, a hem vertex of the back panel is half a shirt from a shoulder along the
+  // cloth, though the layers are 1.5 cm apart.
+  SceneConfig shirt = meshScene(kSourceDirectory + "/config/meshes/tshirt.obj");
+  shirt.cloth.pinned = {955};
+  shirt.cloth.tethers = true;
+  const Simulation shirt_sim(shirt);
+  const Particles& p = shirt_sim.particles();
+  for (const Tether& t : shirt_sim.topology().tethers) {
+    const double straight = (p.position[t.particle] - p.position[t.anchor]).norm();
+    EXPECT_GE(t.max_length, straight * (1.0 - 1e-12));
+  }
+}
+
+// A half cylinder of radius R (axis along x), n_around x n_along vertices, as OBJ text.
+std::string halfCylinderObj(double radius, double length, int around, int along) {
+  std::ostringstream obj;
+  obj.precision(17);
+  const double pi = std::acos(-1.0);
+  for (int a = 0; a < around; ++a) {
+    const double angle = pi * a / (around - 1);
+    for (int l = 0; l < along; ++l) {
+      obj << "v " << length * l / (along - 1) << " " << radius * std::cos(angle) << " "
+          << radius * std::sin(angle) << "\n";
+    }
+  }
+  for (int a = 0; a + 1 < around; ++a) {
+    for (int l = 0; l + 1 < along; ++l) {
+      const int i = a * along + l + 1, j = i + 1, k = i + along, m = k + 1;
+      obj << "f " << i << " " << j << " " << m << "\nf " << i << " " << m << " " << k << "\n";
+    }
+  }
+  return obj.str();
+}
+
+TEST(ClothMesh, CurvedRestShapeIsKeptWithoutGravity) {
+  SceneConfig scene = meshScene(writeObj("half_cylinder.obj", halfCylinderObj(0.1, 0.3, 13, 16)));
+  scene.solver.gravity = Vec3::Zero();
+  scene.solver.substeps = 10;
+  scene.cloth.bend_compliance = 1e-3;
+  scene.cloth.rpy = Vec3(0.3, 1.0, -2.0);  // any pose: the rest term turns with the hinges
+  scene.cloth.origin = Vec3(1.0, 2.0, 3.0);
+  Simulation sim(scene);
+  int curved = 0;
+  for (const BendRest& rest : sim.topology().bend_rest) curved += rest.curved ? 1 : 0;
+  // Hinges across the curvature are curved at rest; those along the straight rulings are flat.
+  EXPECT_GT(curved, 100);
+  const Vec3Array start = sim.particles().position;
+  // A kick: the shape must come back, not merely stay because nothing moves it.
+  sim.mutableParticles().position[6 * 16 + 8] += 0.01 * Vec3::UnitZ();
+  for (int k = 0; k < 120; ++k) sim.step();
+  double worst = 0.0;
+  for (int i = 0; i < sim.particles().cloth_count; ++i) {
+    worst = std::max(worst, (sim.particles().position[i] - start[i]).norm());
+  }
+  // The kick moves the whole free shell a little (momentum), so compare shapes: the largest
+  // change of any particle's distance to the others' centre of mass.
+  Vec3 c0 = Vec3::Zero(), c1 = Vec3::Zero();
+  const int n = sim.particles().cloth_count;
+  for (int i = 0; i < n; ++i) {
+    c0 += start[i] / n;
+    c1 += sim.particles().position[i] / n;
+  }
+  double shape_change = 0.0;
+  for (int i = 0; i < n; ++i) {
+    shape_change = std::max(
+        shape_change, std::abs((sim.particles().position[i] - c1).norm() - (start[i] - c0).norm()));
+  }
+  EXPECT_LT(shape_change, 2e-3) << "largest displacement " << worst;  // 2 % of the radius
+}
+
+TEST(ClothMesh, BadMeshesAreRefusedNamingTheFaceOrVertex) {
+  SceneConfig scene = test::clothScene(2, 2, 0.1, Method::kXpbd);
+  scene.cloth.mesh = "/nonexistent/cloth.obj";
+  try {
+    loadClothMesh(scene);
+    ADD_FAILURE() << "missing file loaded";
+  } catch (const ConfigError& e) {
+    EXPECT_TRUE(contains(e.what(), "cloth.mesh")) << e.what();
+    EXPECT_TRUE(contains(e.what(), "/nonexistent/cloth.obj")) << e.what();
+    EXPECT_TRUE(contains(e.what(), "not found")) << e.what();
+  }
+  std::string error = errorOf("no_faces.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n");
+  EXPECT_TRUE(contains(error, "no faces")) << error;
+  error = errorOf("out_of_range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 3 7\n");
+  EXPECT_TRUE(contains(error, "face 2 (line 5) uses vertex 7")) << error;
+  error = errorOf("unreferenced.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 5 5 5\nf 1 2 3\n");
+  EXPECT_TRUE(contains(error, "vertex 4 (particle 3)")) << error;
+  EXPECT_TRUE(contains(error, "used by no")) << error;
+  // Used by a degenerate face only: as good as unused.
+  error = errorOf("degenerate_only.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nf 1 2 3\nf 1 2 4\n");
+  EXPECT_TRUE(contains(error, "vertex 4 (particle 3)")) << error;
+  // Only degenerate faces: nothing left to simulate.
+  error = errorOf("all_degenerate.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n");
+  EXPECT_TRUE(contains(error, "every face is degenerate")) << error;
+  error = errorOf("not_obj.stl", "solid x\n");
+  EXPECT_TRUE(contains(error, "OBJ")) << error;
+}
+
+TEST(ClothMesh, TooManyVerticesAreRefusedBeforeTheyAreRead) {
+  std::string text;
+  text.reserve(8 * (kMaxParticles + 1));
+  for (std::int64_t k = 0; k <= kMaxParticles; ++k) text += "v 0 0 0\n";
+  const std::string error = errorOf("huge.obj", text);
+  EXPECT_TRUE(contains(error, "more than " + std::to_string(kMaxParticles) + " vertices"))
+      << error.substr(0, 200);
+}
+
+TEST(ClothMesh, AcceptedFlawsLoadWithAWarningNamingThem) {
+  const std::string square = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n";
+  // A quad: split as a fan into 2 triangles (1 2 3, 1 3 4).
+  SceneConfig scene;
+  auto warnings = warningsOf("quad.obj", square + "f 1 2 3 4\n", &scene);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_TRUE(contains(warnings[0], "face 1 (line 5)")) << warnings[0];
+  EXPECT_TRUE(contains(warnings[0], "fan")) << warnings[0];
+  EXPECT_EQ(scene.cloth.mesh_data->triangles, (std::vector<unsigned>{0, 1, 2, 0, 2, 3}));
+  // A degenerate triangle (repeated vertex, zero area): left out.
+  // Vertex 5 is the centre of the square: face 4 (1 5 3) has no area, face 3 a repeated vertex.
+  warnings =
+      warningsOf("degenerate.obj",
+                 square + "v 0.5 0.5 0\nf 1 2 3\nf 1 3 4\nf 1 2 2\nf 1 5 3\nf 1 2 5\n", &scene);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_TRUE(contains(warnings[0], "2 degenerate triangles")) << warnings[0];
+  EXPECT_TRUE(contains(warnings[0], "face 3 (line 8)")) << warnings[0];
+  EXPECT_TRUE(contains(warnings[0], "face 4 (line 9)")) << warnings[0];
+  EXPECT_EQ(scene.cloth.mesh_data->triangles, (std::vector<unsigned>{0, 1, 2, 0, 2, 3, 0, 1, 4}));
+  EXPECT_EQ(scene.cloth.mesh_data->triangle_face, (std::vector<int>{1, 2, 5}));
+  // Duplicated (unwelded) vertices: kept apart, named.
+  warnings = warningsOf("duplicate.obj", square + "v 1 1 0\nf 1 2 3\nf 1 5 4\n", &scene);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_TRUE(contains(warnings[0], "vertex 5 = vertex 3")) << warnings[0];
+  const Simulation duplicate(scene);
+  EXPECT_EQ(duplicate.particles().cloth_count, 5);
+  EXPECT_EQ(duplicate.topology().bend.size(), 0u);  // open along the unwelded edge 1-3 / 1-5
+  // A non-manifold edge (1-3 shared by three triangles): stretch kept, no hinge across it.
+  warnings =
+      warningsOf("non_manifold.obj", square + "v 1 0 1\nf 1 2 3\nf 1 3 4\nf 1 3 5\n", &scene);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_TRUE(contains(warnings[0], "vertices 1-3")) << warnings[0];
+  EXPECT_TRUE(contains(warnings[0], "non-manifold")) << warnings[0];
+  const Simulation fin(scene);
+  EXPECT_EQ(fin.topology().bend.size(), 0u);
+  EXPECT_EQ(fin.topology().stretch.size(), 7u);  // 1-2 2-3 3-4 1-4 3-5 1-5, and 1-3 once
+}
+
+TEST(ClothMesh, ShippedTshirtKeepsItsLayersApartOnATable) {
+  SceneConfig scene = loadScene(kSourceDirectory + "/config/tshirt.yaml");
+  EXPECT_TRUE(scene.load_warnings.empty());
+  Simulation sim(scene);
+  EXPECT_EQ(countSelfIntersections(sim.particles(), sim.topology()), 0);
+  int worst = 0;
+  for (int k = 0; k < 60; ++k) {  // 1 s: dropped 10 cm, landed, settling
+    sim.step();
+    if (k % 10 == 9)
+      worst = std::max(worst, countSelfIntersections(sim.particles(), sim.topology()));
+  }
+  EXPECT_EQ(worst, 0);
+  EXPECT_TRUE(allFinite(sim.particles()));
+  // It landed: the lowest particle rests on the table top (0.75 m) within 2 thicknesses.
+  double lowest = 1e9;
+  for (const Vec3& x : sim.particles().position) lowest = std::min(lowest, x.z());
+  EXPECT_NEAR(lowest, 0.75 + scene.cloth.thickness, 2.0 * scene.cloth.thickness);
+}
+
+}  // namespace
+}  // namespace pbd_cloth
