@@ -171,6 +171,13 @@ TEST(SimState, RobotWithMeshLinksSweepingTheClothContinuesBitForBit) {
   EXPECT_EQ(saved.robot_links.size(), scene.robot.model.links.size());
 }
 
+// A mesh cloth (the shipped T-shirt hung from its shoulders: curved rest hinges, mesh-geodesic
+// tethers, self-collision between its two layers).
+TEST(SimState, MeshClothContinuesBitForBit) {
+  setenv("ROS_PACKAGE_PATH", PBD_CLOTH_SOURCE_DIR, 1);  // its package:// OBJ
+  expectContinuesBitForBit(shippedScene("tshirt_hanging.yaml"), 15, 30);
+}
+
 // --- Refusals ---------------------------------------------------------------------------------
 
 class SimStateRefusal : public ::testing::Test {
