@@ -542,12 +542,28 @@ void ClothRos::diagnosticsCallback(const ros::WallTimerEvent& /*event*/) {
 bool ClothRos::resetCallback(std_srvs::Trigger::Request& /*request*/,
                              std_srvs::Trigger::Response& response) {
   std::lock_guard<std::mutex> lock(mutex_);
-  // As the clock, the node keeps its time going forward (whoever follows /clock would see it jump
-  // back); otherwise simulated time 0 is now.
-  resetSimulation(config_.publish_clock ? stateTime() : ros::Time::now());
+  // Otherwise simulated time 0 is now.
+  resetSimulation(restartTime());
+  announceClock();
   response.success = true;
   response.message = "back to the initial state";
   return true;
+}
+
+// The ROS time a reset or set state is stamped with. As the clock, the node keeps its time going
+// forward, one step past the last state, so that no two states share a stamp and whoever follows
+// /clock never sees it stand still or jump back; otherwise it is now.
+ros::Time ClothRos::restartTime() const {
+  if (!config_.publish_clock) return ros::Time::now();
+  return stateTime() + ros::Duration(1.0 / sim_->scene().step_rate);
+}
+
+// As the clock: /clock at the restarted state's time at once, before its first step.
+void ClothRos::announceClock() {
+  if (!config_.publish_clock) return;
+  rosgraph_msgs::Clock clock;
+  clock.clock = stateTime();
+  clock_pub_.publish(clock);
 }
 
 void ClothRos::resetSimulation(const ros::Time& origin) {
@@ -589,7 +605,7 @@ bool ClothRos::setStateCallback(SetState::Request& request, SetState::Response& 
              "' (states are not transformed)";
   }
   // Before the state changes: the ROS time the set state will be stamped with.
-  const ros::Time stamp = config_.publish_clock ? stateTime() : ros::Time::now();
+  const ros::Time stamp = restartTime();
   if (!reason.empty() || !StateConversions::fromMessage(request.state, state, reason) ||
       !sim_->setState(state, reason)) {
     rejections_.reject(set_state_service_.getService(), RejectReason::kBadValue,
@@ -599,6 +615,7 @@ bool ClothRos::setStateCallback(SetState::Request& request, SetState::Response& 
     return true;
   }
   step_clock_.continueFrom(stamp, sim_->time());
+  announceClock();
   publish_ticks_.restart(sim_->time());
   // As after a reset: bodies start afresh from the set poses, and simulated time jumped.
   for (Body& body : bodies_) {

@@ -176,6 +176,8 @@ class ClothRos {
   // the step crossed a publish tick.
   void stepOnce();
   // Back to the initial state with simulated time 0 at `origin`; publishes that state.
+  ros::Time restartTime() const;
+  void announceClock();
   void resetSimulation(const ros::Time& origin);
   void pollTfFrames(double arrival);
   // A robot link's tf: lost (left out of the collisions) or found (placed without a sweep).
