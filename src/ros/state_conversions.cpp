@@ -1,38 +1,20 @@
 #include "pbd_cloth/ros/state_conversions.h"
 
+#include "pbd_cloth/ros/ros_conversions.h"
+
 namespace pbd_cloth {
 
 namespace {
 
-geometry_msgs::Point toPoint(const Vec3& v) {
-  geometry_msgs::Point p;
-  p.x = v.x();
-  p.y = v.y();
-  p.z = v.z();
-  return p;
-}
-
-geometry_msgs::Vector3 toVector(const Vec3& v) {
-  geometry_msgs::Vector3 out;
-  out.x = v.x();
-  out.y = v.y();
-  out.z = v.z();
-  return out;
-}
+// The same conversions as the rest of the adapter: they copy doubles exactly, and poses are not
+// normalised on the way out.
+geometry_msgs::Point toPoint(const Vec3& v) { return RosConversions::toPoint(v); }
+geometry_msgs::Vector3 toVector(const Vec3& v) { return RosConversions::toVector3(v); }
+geometry_msgs::Pose toPose(const Pose& pose) { return RosConversions::toPoseMessage(pose); }
 
 template <class Message>
 Vec3 toVec3(const Message& m) {
   return Vec3(m.x, m.y, m.z);
-}
-
-geometry_msgs::Pose toPose(const Pose& pose) {
-  geometry_msgs::Pose msg;
-  msg.position = toPoint(pose.position);
-  msg.orientation.x = pose.orientation.x();
-  msg.orientation.y = pose.orientation.y();
-  msg.orientation.z = pose.orientation.z();
-  msg.orientation.w = pose.orientation.w();
-  return msg;
 }
 
 // Not normalised (RosConversions::fromPoseMessage does): the state continues bit for bit.
