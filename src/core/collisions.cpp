@@ -298,10 +298,7 @@ double Collisions::projectObstacles(Particles& p) {
       // Cheap cull: a particle whose path of this substep stays out of the obstacle's bounds
       // (grown by its radius) cannot touch it.
       const double reach = r + (x - p.substep_start[i]).norm();
-      if (!pushed && ((x.array() + reach < obstacle_lo_[k].array()).any() ||
-                      (x.array() - reach > obstacle_hi_[k].array()).any())) {
-        continue;
-      }
+      if (!pushed && outsideBounds(x, reach, obstacle_lo_[k], obstacle_hi_[k])) continue;
       const Shape& shape = shapes_[k];
       const Frame& begin = frame_begin_[k];
       const Frame& end = frame_end_[k];
