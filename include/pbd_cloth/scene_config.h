@@ -210,6 +210,29 @@ struct RobotConfig {
   RobotModel model;
 };
 
+// cameras[i]: a simulated depth camera (depth_camera.h renders it, the node publishes it).
+struct CameraConfig {
+  std::string name;   // cameras[i].name: the node's topics ~<name>/depth/...
+  std::string frame;  // cameras[i].frame: the optical frame (REP 103: z forward, x right, y down)
+  // cameras[i].pose ([x y z qx qy qz qw] of the optical frame in frame_id). Given: the camera
+  // stands there and the node broadcasts `frame`; empty ([]): the node follows `frame` in tf.
+  bool has_pose = false;
+  Pose pose;
+  int width = 320;    // cameras[i].width (pixels)
+  int height = 240;   // cameras[i].height
+  double fx = 277.0;  // cameras[i].fx, fy: focal lengths in pixels
+  double fy = 277.0;
+  // cameras[i].cx, cy: principal point in pixels, pixel centres at integers (OpenCV, ROS
+  // CameraInfo). Default: the image centre, (width - 1) / 2 and (height - 1) / 2.
+  double cx = -1.0;
+  double cy = -1.0;
+  double rate = 15.0;      // cameras[i].rate: images per second (<= step_rate)
+  double range_min = 0.1;  // cameras[i].range.min (m): nearer, or farther than max: NaN
+  double range_max = 5.0;  // cameras[i].range.max (m)
+  double noise = 0.0;      // cameras[i].noise: standard deviation (m) of Gaussian depth noise
+  int seed = 0;            // cameras[i].seed: the noise's random stream (same seed, same noise)
+};
+
 struct BoundsConfig {
   bool enabled = false;  // true when the scene has a `bounds` key
   Eigen::Vector3d min{-10.0, -10.0, -10.0};
@@ -227,6 +250,7 @@ struct SceneConfig {
   BoundsConfig bounds;
   std::vector<ObstacleConfig> obstacles;
   RobotConfig robot;
+  std::vector<CameraConfig> cameras;
   // What loading found that is allowed but worth a warning (an open mesh, a link without
   // collision elements ...); cloth_bench prints them, the node logs them.
   std::vector<std::string> load_warnings;

@@ -326,6 +326,28 @@ void validateObstacle(const std::string& key, const ObstacleConfig& o,
   validateShape(key, o);
 }
 
+// Image sizes are capped to protect the process, as kMaxPasses is: 4096 x 4096 floats is 64 MB.
+constexpr int kMaxImageSide = 4096;
+
+void validateCamera(const std::string& key, const CameraConfig& c, double step_rate,
+                    std::set<std::string>& names) {
+  checkName(key + ".name", c.name, names);
+  checkFrame(key + ".frame", c.frame, false);
+  if (c.has_pose) checkPose(key + ".pose", c.pose);
+  checkInteger(key + ".width", c.width, 1, kMaxImageSide);
+  checkInteger(key + ".height", c.height, 1, kMaxImageSide);
+  checkNumber(key + ".fx", c.fx, kPositive);
+  checkNumber(key + ".fy", c.fy, kPositive);
+  checkFinite(key + ".cx", c.cx);
+  checkFinite(key + ".cy", c.cy);
+  // An image is rendered from the state after a step; faster than stepping would repeat states.
+  checkNumber(key + ".rate", c.rate, Range{0.0, step_rate, true, false});
+  checkNumber(key + ".range.min", c.range_min, kPositive);
+  checkNumber(key + ".range.max", c.range_max, Range{c.range_min, kInf, true, true});
+  checkNumber(key + ".noise", c.noise, kNonNegative);
+  checkInteger(key + ".seed", c.seed, 0, std::numeric_limits<int>::max());
+}
+
 std::string jointNames(const RobotModel& model) {
   std::string out;
   for (const RobotJoint& joint : model.joints) {
@@ -406,6 +428,10 @@ void validate(const SceneConfig& scene) {
     validateObstacle(indexed("obstacles", k), scene.obstacles[k], names);
   }
   validateRobot(scene.robot);
+  // Camera names share the set: a camera called like a gripper would share its ~<name>/ namespace.
+  for (std::size_t k = 0; k < scene.cameras.size(); ++k) {
+    validateCamera(indexed("cameras", k), scene.cameras[k], scene.step_rate, names);
+  }
   if (scene.bounds.enabled) {
     checkFinite("bounds.min", scene.bounds.min);
     checkFinite("bounds.max", scene.bounds.max);

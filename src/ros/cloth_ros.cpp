@@ -87,6 +87,7 @@ ClothRos::ClothRos(ros::NodeHandle nh, ros::NodeHandle nh_private)
   grasp_by_name_sub_ =
       nh_private_.subscribe("grasp_by_name", 10, &ClothRos::graspByNameCallback, this);
   createBodies();
+  cameras_ = std::make_unique<DepthCameras>(nh_private_, scene, tf_buffer_);
 
   reconfigure_ =
       std::make_unique<SolverReconfigure>(nh_private_, tuningFromSimulation(*sim_),
@@ -483,6 +484,8 @@ void ClothRos::stepOnce() {
   if (publish_ticks_.due(sim_->time())) {
     publishOutputs();
   }
+  // A diverged state is not shown to the cameras either (publishOutputs reports it).
+  if (!cameras_->empty() && allFinite(sim_->particles())) cameras_->afterStep(*sim_, stateTime());
 }
 
 // Coincident particles (a cloth crushed flat by a gripper, a bad initial state) leave their stretch
@@ -570,6 +573,7 @@ void ClothRos::resetSimulation(const ros::Time& origin) {
   sim_->reset();
   step_clock_.restart(origin);
   publish_ticks_.restart();
+  cameras_->restart(0.0);
   // Grippers and obstacles are back at their scene poses: the next pose (or tf stamp) starts
   // afresh from there, and a replayed stream with earlier stamps is not out of order.
   for (Body& body : bodies_) {
@@ -617,6 +621,7 @@ bool ClothRos::setStateCallback(SetState::Request& request, SetState::Response& 
   step_clock_.continueFrom(stamp, sim_->time());
   announceClock();
   publish_ticks_.restart(sim_->time());
+  cameras_->restart(sim_->time());
   // As after a reset: bodies start afresh from the set poses, and simulated time jumped.
   for (Body& body : bodies_) {
     body.follower.reset();

@@ -12,7 +12,7 @@ namespace pbd_cloth {
 const std::vector<std::string>& sceneParameterKeys() {
   static const std::vector<std::string> keys = {"frame_id",  "step_rate", "publish_rate", "solver",
                                                 "cloth",     "granular",  "grippers",     "bounds",
-                                                "obstacles", "robot"};
+                                                "obstacles", "robot",     "cameras"};
   return keys;
 }
 

@@ -430,13 +430,42 @@ void readRobot(const YAML::Node& node, RobotConfig& r) {
   }
 }
 
+CameraConfig readCamera(const YAML::Node& node, const std::string& key) {
+  const MapReader map(node, key,
+                      {"name", "frame", "pose", "width", "height", "fx", "fy", "cx", "cy", "rate",
+                       "range", "noise", "seed"});
+  if (!node || node.IsNull()) wrongType(node, key, "a map {name, frame, width, height, ...}");
+  CameraConfig c;
+  map.read("name", c.name);
+  map.read("frame", c.frame);
+  // `pose: []` (as INTERFACE.md writes it) or no pose: the camera follows its frame in tf.
+  const YAML::Node pose = map.get("pose");
+  c.has_pose = pose && !pose.IsNull() && !(pose.IsSequence() && pose.size() == 0);
+  if (c.has_pose) c.pose = toPose(pose, map.keyOf("pose"));
+  map.read("width", c.width);
+  map.read("height", c.height);
+  map.read("fx", c.fx);
+  map.read("fy", c.fy);
+  c.cx = (c.width - 1) / 2.0;
+  c.cy = (c.height - 1) / 2.0;
+  map.read("cx", c.cx);
+  map.read("cy", c.cy);
+  map.read("rate", c.rate);
+  const MapReader range(map.get("range"), map.keyOf("range"), {"min", "max"});
+  range.read("min", c.range_min);
+  range.read("max", c.range_max);
+  map.read("noise", c.noise);
+  map.read("seed", c.seed);
+  return c;
+}
+
 // Top-level keys accepted and ignored: see scene_yaml.h.
 const Names kIgnoredTopLevelKeys = {"description"};
 
 SceneConfig readScene(const YAML::Node& root) {
   const MapReader map(root, "",
                       {"frame_id", "step_rate", "publish_rate", "solver", "cloth", "granular",
-                       "grippers", "bounds", "obstacles", "robot"},
+                       "grippers", "bounds", "obstacles", "robot", "cameras"},
                       kIgnoredTopLevelKeys);
   SceneConfig scene;
   map.read("frame_id", scene.frame_id);
@@ -461,6 +490,10 @@ SceneConfig readScene(const YAML::Node& root) {
   bounds_map.read("min", scene.bounds.min);
   bounds_map.read("max", scene.bounds.max);
   readRobot(map.get("robot"), scene.robot);
+  const YAML::Node cameras = listOf(map, "cameras", "a list of cameras");
+  for (std::size_t k = 0; k < cameras.size(); ++k) {
+    scene.cameras.push_back(readCamera(cameras[k], indexed("cameras", k)));
+  }
   return scene;
 }
 

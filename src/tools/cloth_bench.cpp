@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "bench_command_line.h"
+#include "pbd_cloth/depth_camera.h"
 #include "pbd_cloth/scene_yaml.h"
 #include "pbd_cloth/simulation.h"
 
@@ -52,6 +53,11 @@ const char kUsage[] =
     "                         saved, loaded and run 1 s more. A file that does not fit the scene\n"
     "                         (particle count, bodies, non-finite values) exits with 2 and the\n"
     "                         reason"
+    "  --depth <prefix>       after the run, render every camera of the scene's `cameras:` (each\n"
+    "                         needs its pose: no tf here) and write <prefix><name>.pfm, the\n"
+    "                         32-bit float depth image (Portable Float Map, rows bottom-up as\n"
+    "                         the format says; NaN where nothing is seen); adds depth_ms, the\n"
+    "                         mean render time of one image (of 20 renders), to the line\n"
     "  --target-max-strain <e>  instead of one run, search substeps x iterations (iterations\n"
     "                         1, 2, 4, 8; substeps by doubling then bisection up to\n"
     "                         --max-substeps, default 256; settings with at least the passes of\n"
@@ -69,6 +75,7 @@ using pbd_cloth::bench::UsageError;
 struct Options : pbd_cloth::bench::CommonOptions {
   std::string save_state;          // --save-state: the final state goes there
   std::string load_state;          // --load-state: the run starts from it
+  std::string depth;               // --depth: prefix of the depth images written after the run
   double target_max_strain = 0.0;  // > 0: search the cheapest setting instead of one run
   double target_mean_strain = 0.0;
   int max_substeps = 256;  // upper end of the search
@@ -94,6 +101,8 @@ Options parseArguments(int argc, char** argv) {
       options.save_state = next();
     } else if (option == "--load-state") {
       options.load_state = next();
+    } else if (option == "--depth") {
+      options.depth = next();
     } else if (option == "--max-substeps") {
       options.max_substeps = bench::parseCount(option, next(), 1, 100000);
     } else {
@@ -154,7 +163,58 @@ struct BenchResult {
   double broad_phase_runs = 0.0;  // per step: 1, plus re-runs for particles that left their boxes
   int particles = 0;
   int sample_every = 1;
+  double depth_ms = -1.0;  // --depth: mean time to render one image; < 0: not asked
 };
+
+// Writes depth as a Portable Float Map: "Pf", size, a negative scale for little-endian floats,
+// then rows from the bottom up.
+void writePfm(const std::string& path, const pbd_cloth::PinholeCamera& camera,
+              const std::vector<float>& depth) {
+  std::ofstream out(path, std::ios::binary);
+  out << "Pf\n" << camera.width << ' ' << camera.height << "\n-1.0\n";
+  for (int v = camera.height - 1; v >= 0; --v) {
+    out.write(
+        reinterpret_cast<const char*>(depth.data() + static_cast<std::size_t>(v) * camera.width),
+        static_cast<std::streamsize>(camera.width * sizeof(float)));
+  }
+  if (!out) throw std::runtime_error("--depth: cannot write '" + path + "'");
+}
+
+// --depth: every camera's image of the final state; returns the mean render time (ms) of one
+// image over 20 renders of each camera.
+double writeDepthImages(const pbd_cloth::SceneConfig& scene, const pbd_cloth::Simulation& sim,
+                        const std::string& prefix) {
+  using Clock = std::chrono::steady_clock;
+  if (scene.cameras.empty()) throw UsageError("--depth: the scene has no cameras");
+  pbd_cloth::DepthSnapshot snapshot;
+  snapshot.capture(sim);
+  pbd_cloth::DepthRenderer renderer;
+  double seconds = 0.0;
+  int renders = 0;
+  for (std::size_t k = 0; k < scene.cameras.size(); ++k) {
+    const pbd_cloth::CameraConfig& config = scene.cameras[k];
+    if (!config.has_pose) {
+      throw UsageError("--depth: cameras[" + std::to_string(k) + "].pose is needed ('" +
+                       config.name + "' follows tf in the node; cloth_bench has no tf)");
+    }
+    const pbd_cloth::PinholeCamera camera = pbd_cloth::PinholeCamera::fromConfig(config);
+    const pbd_cloth::Frame pose = pbd_cloth::frameFromPose(config.pose);
+    std::vector<float> depth(camera.pixelCount());
+    for (int r = 0; r < 20; ++r) {
+      const Clock::time_point begin = Clock::now();
+      renderer.render(snapshot, camera, pose, depth.data());
+      seconds += std::chrono::duration<double>(Clock::now() - begin).count();
+      ++renders;
+    }
+    // The node's noise for the image at this time (same seed and image index).
+    const auto frame = static_cast<std::uint64_t>(std::llround(sim.time() * config.rate));
+    pbd_cloth::addDepthNoise(depth.data(), depth.size(), config.noise,
+                             (static_cast<std::uint64_t>(config.seed) << 16) | k, frame,
+                             camera.range_min, camera.range_max);
+    writePfm(prefix + config.name + ".pfm", camera, depth);
+  }
+  return 1e3 * seconds / renders;
+}
 
 // Runs the scene for `duration` seconds of 1/step_rate steps. Only the step calls are timed.
 // Writes the CSV samples as it goes and the final positions / mesh to the streams that are open.
@@ -222,6 +282,7 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
   }
   if (positions.is_open()) writePositions(positions, sim.particles());
   if (mesh.is_open()) writeMesh(mesh, sim);
+  if (!options.depth.empty()) result.depth_ms = writeDepthImages(scene, sim, options.depth);
   if (!options.save_state.empty()) {
     pbd_cloth::SimulationState state;
     sim.getState(state);
@@ -252,13 +313,15 @@ void printResult(const pbd_cloth::SceneConfig& scene, const BenchResult& r) {
       "self_intersections=%d energy=%.9g finite=%d steps=%lld sim_time=%.9g "
       "iterations_per_step=%.6g predict_ms=%.6g collide_ms=%.6g project_ms=%.6g update_ms=%.6g "
       "method=%s substeps=%d iterations=%d particles=%d max_self_intersections=%d "
-      "sample_every=%d final_max_strain=%.9g ordering=%s contact_ms=%.6g broad_phase_runs=%.6g\n",
+      "sample_every=%d final_max_strain=%.9g ordering=%s contact_ms=%.6g broad_phase_runs=%.6g",
       r.wall_ms_per_step, r.max_strain, last.mean_strain, r.max_penetration,
       last.self_intersections, last.energy, last.finite ? 1 : 0, r.steps, r.sim_time,
       r.iterations_per_step, r.predict_ms, r.collide_ms, r.project_ms, r.update_ms,
       pbd_cloth::toString(scene.solver.method), scene.solver.substeps, scene.solver.iterations,
       r.particles, r.max_self_intersections, r.sample_every, last.max_strain,
       pbd_cloth::toString(scene.solver.ordering), r.contact_ms, r.broad_phase_runs);
+  if (r.depth_ms >= 0.0) std::printf(" depth_ms=%.6g", r.depth_ms);
+  std::printf("\n");
 }
 
 // --target-max-strain / --target-mean-strain: the cheapest substeps x iterations that meet the

@@ -24,6 +24,8 @@
 //                             then, which does not go back), and the bodies stay at the state's
 //                             poses until their next pose or tf sample.
 //   ~set_parameters, ...      dynamic_reconfigure of cfg/Solver.cfg (solver_reconfigure.h)
+//   ~<camera>/depth/image_raw, camera_info, points
+//                             out: the scene's simulated depth cameras (depth_cameras.h)
 //   /diagnostics              cloth_diagnostics.h
 //   /clock                    out, only with ~publish_clock: rosgraph_msgs/Clock after every step
 //   /<robot.description>      parameter (default /robot_description, resolved in the node's
@@ -86,6 +88,7 @@
 #include "pbd_cloth/GetState.h"
 #include "pbd_cloth/SetState.h"
 #include "pbd_cloth/ros/cloth_diagnostics.h"
+#include "pbd_cloth/ros/depth_cameras.h"
 #include "pbd_cloth/ros/input_rejections.h"
 #include "pbd_cloth/ros/pose_follower.h"
 #include "pbd_cloth/ros/pose_transformer.h"
@@ -224,6 +227,7 @@ class ClothRos {
   ros::Subscriber grasp_by_name_sub_;
   std::unique_ptr<SolverReconfigure> reconfigure_;
   std::unique_ptr<ClothDiagnostics> diagnostics_;
+  std::unique_ptr<DepthCameras> cameras_;  // cameras: (depth_cameras.h), its own render thread
   // Declared last so they stop first on destruction, before the simulation they drive.
   ros::WallTimer step_timer_;
   ros::WallTimer diagnostics_timer_;
