@@ -24,6 +24,7 @@
 #include "../core/mesh_builders.h"
 #include "pbd_cloth/cloth_builder.h"
 #include "pbd_cloth/collisions.h"
+#include "pbd_cloth/depth_camera.h"
 #include "pbd_cloth/scene_assets.h"
 #include "pbd_cloth/scene_yaml.h"
 #include "pbd_cloth/simulation.h"
@@ -381,6 +382,81 @@ void BM_HangingStep(benchmark::State& state) {
                  std::to_string(scene.solver.iterations) + ": whole step, per particle");
 }
 
+// A scene file next to config/hanging.yaml (the --scene flag moves them together).
+std::string siblingScene(const std::string& name) {
+  const std::string& hanging = scenePath();
+  return hanging.substr(0, hanging.rfind('/') + 1) + name;
+}
+
+// One depth image (depth_camera.h) of a shipped scene, at the camera's size times range(1) / 2
+// (2: as configured, 320 x 240; 4: 640 x 480, the focal lengths scaled alike so the view is
+// the same). range(0) = 0: config/demo.yaml with its head camera after 1 s (a 20 x 20 towel on a
+// table, a floor plane); 1: config/hanging.yaml (50 x 50, 4802 triangles) after 1 s, seen by the
+// same camera 2 m in front of the cloth. The render thread's cost per image.
+void BM_DepthRender(benchmark::State& state) {
+  SceneConfig scene;
+  try {
+    scene = loadScene(siblingScene("demo.yaml"));
+  } catch (const std::exception& e) {
+    state.SkipWithError(e.what());
+    return;
+  }
+  CameraConfig config = scene.cameras.at(0);
+  if (state.range(0) == 1) {
+    scene = loadScene(scenePath());
+    // Optical z along world +y, x along world -x... looking at the cloth's centre from y = -2 m.
+    config.pose.position = Eigen::Vector3d(0.5, -2.0, 1.0);
+    config.pose.orientation = Eigen::Quaterniond(
+        Eigen::AngleAxisd(-M_PI / 2, Eigen::Vector3d::UnitX()).toRotationMatrix());
+  }
+  const double scale = state.range(1) / 2.0;
+  config.width = static_cast<int>(config.width * scale);
+  config.height = static_cast<int>(config.height * scale);
+  config.fx *= scale;
+  config.fy *= scale;
+  config.cx = (config.width - 1) / 2.0;
+  config.cy = (config.height - 1) / 2.0;
+  Simulation sim(scene);
+  for (int k = 0; k < scene.step_rate; ++k) sim.step();
+  DepthSnapshot snapshot;
+  snapshot.capture(sim);
+  DepthRenderer renderer;
+  const PinholeCamera camera = PinholeCamera::fromConfig(config);
+  const Frame pose = frameFromPose(config.pose);
+  std::vector<float> depth(camera.pixelCount());
+  for (auto _ : state) {
+    renderer.render(snapshot, camera, pose, depth.data());
+    benchmark::DoNotOptimize(depth.data());
+  }
+  long seen = 0;
+  for (float z : depth) seen += std::isfinite(z);
+  state.counters["seen_pixels"] = static_cast<double>(seen);
+  state.SetLabel(std::string(state.range(0) == 0 ? "demo.yaml " : "hanging.yaml ") +
+                 std::to_string(camera.width) + "x" + std::to_string(camera.height) +
+                 ": one image");
+}
+
+// What a camera costs the step thread: copying the state out (DepthSnapshot::capture) of
+// config/hanging.yaml (2500 particles).
+void BM_DepthCapture(benchmark::State& state) {
+  SceneConfig scene;
+  try {
+    scene = loadScene(scenePath());
+  } catch (const std::exception& e) {
+    state.SkipWithError(e.what());
+    return;
+  }
+  Simulation sim(scene);
+  sim.step();
+  DepthSnapshot snapshot;
+  snapshot.capture(sim);
+  for (auto _ : state) {
+    snapshot.capture(sim);
+    benchmark::DoNotOptimize(snapshot.positions.data());
+  }
+  state.SetLabel("hanging.yaml: the step thread's share of one image");
+}
+
 constexpr int kGaussSeidel = static_cast<int>(Ordering::kGaussSeidel);
 constexpr int kJacobi = static_cast<int>(Ordering::kJacobi);
 constexpr int kXpbd = static_cast<int>(Method::kXpbd);
@@ -417,6 +493,14 @@ BENCHMARK(BM_ClothMeshLoadAndBuild)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ParticlePairs)->UseManualTime()->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_SelfCollision)->UseManualTime()->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_SelfCollisionBroadPhase)->UseManualTime()->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_DepthRender)
+    ->ArgNames({"scene", "scale"})
+    ->Args({0, 2})
+    ->Args({0, 4})
+    ->Args({1, 2})
+    ->Args({1, 4})
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_DepthCapture)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_HangingStep)
     ->ArgName("method")
     ->Arg(kVerlet)
