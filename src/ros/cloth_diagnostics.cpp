@@ -82,6 +82,11 @@ void ClothDiagnostics::simulationStatus(diagnostic_updater::DiagnosticStatusWrap
   status.add("max strain", health_.max_strain);
   status.add("max penetration (m)", health_.max_penetration);
   status.add("degenerate constraints (last step)", health_.degenerate_constraints);
+  if (health_.has_cameras) {
+    status.add("depth images published", health_.camera_images);
+    status.add("depth images dropped (render thread busy)", health_.camera_images_dropped);
+    status.add("depth images skipped (no tf for the camera)", health_.camera_images_without_tf);
+  }
 }
 
 void ClothDiagnostics::inputStatus(diagnostic_updater::DiagnosticStatusWrapper& status) {

@@ -539,6 +539,10 @@ void ClothRos::diagnosticsCallback(const ros::WallTimerEvent& /*event*/) {
   health.max_penetration = stats.max_penetration;
   health.degenerate_constraints = static_cast<int>(stats.degenerate_constraints);
   health.finite = allFinite(sim_->particles());
+  health.has_cameras = !cameras_->empty();
+  health.camera_images = cameras_->framesPublished();
+  health.camera_images_dropped = cameras_->framesDropped();
+  health.camera_images_without_tf = cameras_->framesWithoutTf();
   diagnostics_->report(health, rejections_);
 }
 

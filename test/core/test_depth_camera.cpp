@@ -295,6 +295,24 @@ TEST(DepthCamera, NearerSurfaceHidesTheFartherWhicheverIsDrawnFirst) {
   EXPECT_NEAR(render(Simulation(scene), camera, pose).at(camera, 160, 120), 0.25, kFloatDepth);
 }
 
+TEST(DepthCamera, RobotLinksAreSeenAndADisabledLinkIsNot) {
+  // test/data/paddle_robot.urdf with its root at z = 0.5: the paddle's sphere (r 0.05) at
+  // x = -0.3. Disabled (the node's answer to a link without tf), the link is not drawn.
+  Simulation sim(sceneFromYaml(YAML::Load(R"(
+cloth: {rows: 1, cols: 2, spacing: 1.0, origin: [100, 100, 100], pinned: [0, 1]}
+robot: {urdf_file: paddle_robot.urdf, pose: [0, 0, 0.5, 0, 0, 0, 1]}
+)"),
+                               std::string(PBD_CLOTH_SOURCE_DIR) + "/test/data"));
+  const PinholeCamera camera = camera320();
+  const Frame pose = lookingDown(Vec3(-0.3, 0.0, 1.5));
+  // Half a pixel off the axis in x and y: the crest is lower there by (2 * 1.8 mm)^2 / 2r.
+  EXPECT_NEAR(render(sim, camera, pose).at(camera, 160, 120), 0.95, 1.5e-4);
+  const int paddle = sim.robotLinkIndex("paddle");
+  ASSERT_GE(paddle, 0);
+  sim.setRobotLinkEnabled(paddle, false);
+  EXPECT_TRUE(std::isnan(render(sim, camera, pose).at(camera, 160, 120)));
+}
+
 TEST(DepthCamera, NoiseIsSeededGaussianOfTheGivenDeviation) {
   const std::size_t n = 320 * 240;
   const std::vector<float> clean(n, 1.0f);

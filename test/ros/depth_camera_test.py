@@ -19,6 +19,7 @@ import numpy as np
 import rospy
 import rostest
 from sensor_msgs.msg import CameraInfo, Image, PointCloud2
+from diagnostic_msgs.msg import DiagnosticArray
 from tf2_msgs.msg import TFMessage
 
 NODE = '/cloth_node'
@@ -41,6 +42,8 @@ class DepthCameraTest(unittest.TestCase):
             rospy.Subscriber(base + 'points', PointCloud2, self.keep, (camera, 'points'),
                              queue_size=50)
         rospy.Subscriber('/tf_static', TFMessage, self.on_tf_static, queue_size=10)
+        self.diagnostics = {}
+        rospy.Subscriber('/diagnostics', DiagnosticArray, self.on_diagnostics, queue_size=10)
         self.scene = rospy.get_param(NODE)
 
     def keep(self, msg, key):
@@ -52,6 +55,13 @@ class DepthCameraTest(unittest.TestCase):
         with self.lock:
             for t in msg.transforms:
                 self.static_frames[t.child_frame_id] = t
+
+    def on_diagnostics(self, msg):
+        with self.lock:
+            for status in msg.status:
+                for kv in status.values:
+                    if kv.key.startswith('depth images'):
+                        self.diagnostics[kv.key] = int(kv.value)
 
     def complete(self, camera, got=None):
         """Stamps with all three messages, in `got` (a snapshot) or in what arrived so far."""
@@ -156,7 +166,8 @@ class DepthCameraTest(unittest.TestCase):
                                    msg='%s at pixel (%d, %d)' % (what, u, v))
 
         # The tf-followed camera at the same pose sees the same image at the same stamps.
-        shared = sorted(set(self.complete('overhead', got)) & set(self.complete('follower', got)))
+        shared = sorted(set(self.complete('overhead', got)) &
+                        set(self.complete('follower', got)))
         self.assertGreater(len(shared), 2)
         for stamp in shared:
             a = self.depth_of(got['overhead']['image'][stamp])
@@ -175,9 +186,23 @@ class DepthCameraTest(unittest.TestCase):
         self.assertAlmostEqual(t.transform.translation.z, 1.5, places=6)
         self.assertAlmostEqual(abs(t.transform.rotation.x), 1.0, places=6)
 
+        # The node's diagnostics count the images it published (three cameras).
+        deadline = time.time() + 5.0
+        while time.time() < deadline and \
+                self.diagnostics.get('depth images published', 0) < 3 * MIN_FRAMES:
+            time.sleep(0.1)
+        with self.lock:
+            diagnostics = dict(self.diagnostics)
+        self.assertGreaterEqual(diagnostics.get('depth images published', 0), 3 * MIN_FRAMES,
+                                str(diagnostics))
+        # (Skipped images are reported too; the follower's static tf may start after the
+        # node's first image, so their count is not asserted.)
+        self.assertIn('depth images skipped (no tf for the camera)', diagnostics)
+
         # Noise: noisy minus overhead, same state, has the configured deviation (5 mm). 19200
         # pixels a frame: the sample deviation is within 2 % of it (relative error 0.5 %).
-        shared = sorted(set(self.complete('overhead', got)) & set(self.complete('noisy', got)))
+        shared = sorted(set(self.complete('overhead', got)) &
+                        set(self.complete('noisy', got)))
         self.assertGreater(len(shared), 2)
         sigma = self.config('noisy')['noise']
         for stamp in shared[:3]:

@@ -41,6 +41,12 @@ struct SimulationHealth {
   double max_penetration = 0.0;    // m
   int degenerate_constraints = 0;  // skipped in the last step (coincident particles)
   bool finite = true;
+  // Depth cameras (depth_cameras.h), counts since start: images published, dropped because the
+  // render thread was still busy, skipped because tf lacked the camera's frame.
+  bool has_cameras = false;
+  std::uint64_t camera_images = 0;
+  std::uint64_t camera_images_dropped = 0;
+  std::uint64_t camera_images_without_tf = 0;
 };
 
 class ClothDiagnostics {
