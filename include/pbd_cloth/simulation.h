@@ -50,7 +50,8 @@ class Simulation {
   int gripperCount() const { return static_cast<int>(grippers_.size()); }
   const std::string& gripperName(int gripper) const;
   // The pose the gripper reaches at the end of the next step. A live pose stops its trajectory.
-  void setGripperPose(int gripper, const Pose& pose);
+  // A pose with a poseProblem() is refused (false) and the gripper keeps its course.
+  bool setGripperPose(int gripper, const Pose& pose);
   const Pose& gripperPose(int gripper) const;
   bool gripperGrasping(int gripper) const;
   GraspResult setGrasp(int gripper, bool grasp);
@@ -62,8 +63,9 @@ class Simulation {
   int obstacleCount() const { return static_cast<int>(scene_.obstacles.size()); }
   // The obstacle as it stands now (pose at the end of the last step).
   const ObstacleConfig& obstacle(int obstacle) const { return collisions_.obstacles()[obstacle]; }
-  // The pose the obstacle reaches at the end of the next step (moved as a kinematic body).
-  void setObstaclePose(int obstacle, const Pose& pose);
+  // The pose the obstacle reaches at the end of the next step (moved as a kinematic body). A
+  // pose with a poseProblem() is refused (false).
+  bool setObstaclePose(int obstacle, const Pose& pose);
   // The contact handling: candidate counts of the last step (collisions().stats()).
   const Collisions& collisions() const { return collisions_; }
 
@@ -75,8 +77,8 @@ class Simulation {
   const std::string& robotLinkName(int link) const;
   bool robotLinkHasCollision(int link) const;
   // The pose the link reaches at the end of the next step (moved as a kinematic body, swept
-  // continuously). A non-finite pose is ignored.
-  void setRobotLinkPose(int link, const Pose& pose);
+  // continuously). A pose with a poseProblem() is refused (false).
+  bool setRobotLinkPose(int link, const Pose& pose);
   // The link's pose now (end of the last step).
   const Pose& robotLinkPose(int link) const;
   // A disabled link does not collide (the node disables a link whose tf is missing). When it is
@@ -148,6 +150,15 @@ class Simulation {
   std::vector<Pose> link_poses_;
   double time_ = 0.0;
 };
+
+// Live poses (grippers, obstacles, robot links) farther than this from the scene origin in any
+// coordinate are refused: nothing a robot handles is 10 km away, and an absurd coordinate (1e300
+// from a corrupted message) would overflow the step's squares into Inf and NaN.
+constexpr double kMaxPoseCoordinate = 1e4;  // m
+
+// Whether a live pose may enter the simulation: a finite position within kMaxPoseCoordinate, a
+// finite orientation of non-zero length. Empty when it may, else why not.
+std::string poseProblem(const Pose& pose);
 
 // Pose interpolation used by trajectories and substeps: linear position, slerp orientation.
 Pose interpolate(const Pose& a, const Pose& b, double s);

@@ -150,14 +150,25 @@ const std::string& Simulation::robotLinkName(int link) const {
 
 bool Simulation::robotLinkHasCollision(int link) const { return links_[link].collider_count > 0; }
 
-void Simulation::setRobotLinkPose(int link, const Pose& pose) {
-  if (!pose.position.allFinite() || !pose.orientation.coeffs().allFinite() ||
-      pose.orientation.norm() == 0.0) {
-    return;
+std::string poseProblem(const Pose& pose) {
+  if (!pose.position.allFinite() || !pose.orientation.coeffs().allFinite()) {
+    return "not finite";
   }
+  if (pose.position.cwiseAbs().maxCoeff() > kMaxPoseCoordinate) {
+    return "position more than " + std::to_string(static_cast<int>(kMaxPoseCoordinate)) +
+           " m from the scene origin";
+  }
+  // The node refuses near-zero quaternions before they get here; this is the core's own guard.
+  if (!(pose.orientation.norm() > 1e-12)) return "orientation of zero length";
+  return std::string();
+}
+
+bool Simulation::setRobotLinkPose(int link, const Pose& pose) {
+  if (!poseProblem(pose).empty()) return false;
   links_[link].live = true;
   links_[link].target = pose;
   links_[link].target.orientation.normalize();
+  return true;
 }
 
 const Pose& Simulation::robotLinkPose(int link) const { return links_[link].pose; }
@@ -195,9 +206,12 @@ const std::string& Simulation::gripperName(int gripper) const {
   return scene_.grippers[gripper].name;
 }
 
-void Simulation::setGripperPose(int gripper, const Pose& pose) {
+bool Simulation::setGripperPose(int gripper, const Pose& pose) {
+  if (!poseProblem(pose).empty()) return false;
   grippers_[gripper].live = true;
   grippers_[gripper].target = pose;
+  grippers_[gripper].target.orientation.normalize();
+  return true;
 }
 
 const Pose& Simulation::gripperPose(int gripper) const { return grippers_[gripper].pose; }
@@ -273,8 +287,11 @@ int Simulation::obstacleIndex(const std::string& name) const {
   return -1;
 }
 
-void Simulation::setObstaclePose(int obstacle, const Pose& pose) {
-  collisions_.setObstacleTarget(obstacle, pose);
+bool Simulation::setObstaclePose(int obstacle, const Pose& pose) {
+  if (!poseProblem(pose).empty()) return false;
+  Pose target = pose;
+  target.orientation.normalize();
+  return collisions_.setObstacleTarget(obstacle, target);
 }
 
 void Simulation::setSolverConfig(const SolverConfig& solver) {

@@ -23,6 +23,8 @@ const char* toString(RejectReason reason) {
       return "invalid value";
     case RejectReason::kClockJump:
       return "clock went back";
+    case RejectReason::kFarFromOrigin:
+      return "far from the origin";
   }
   return "unknown reason";
 }

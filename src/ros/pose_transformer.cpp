@@ -1,5 +1,7 @@
 #include "pbd_cloth/ros/pose_transformer.h"
 
+#include "pbd_cloth/simulation.h"
+
 #include <cmath>
 #include <sstream>
 
@@ -28,8 +30,22 @@ Pose poseFromTransform(const geometry_msgs::TransformStamped& transform) {
   return pose;
 }
 
-bool finite(const Pose& pose) {
-  return pose.position.allFinite() && pose.orientation.coeffs().allFinite();
+// The pose in the scene frame, as the simulation will take it (simulation.h poseProblem): a
+// transform may turn a finite message into Inf, or carry it 10 km away.
+bool checkScenePose(const Pose& pose, const std::string& frame, PoseTransformer::Failure& failure) {
+  if (!pose.position.allFinite() || !pose.orientation.coeffs().allFinite()) {
+    failure = {RejectReason::kNonFinite, "the transform from '" + frame + "' is not finite"};
+    return false;
+  }
+  const std::string problem = poseProblem(pose);
+  if (!problem.empty()) {
+    std::ostringstream detail;
+    detail << "in the scene frame the pose (from '" << frame << "') is at (" << pose.position.x()
+           << ", " << pose.position.y() << ", " << pose.position.z() << "): " << problem;
+    failure = {RejectReason::kFarFromOrigin, detail.str()};
+    return false;
+  }
+  return true;
 }
 
 }  // namespace
@@ -96,11 +112,7 @@ bool PoseTransformer::toSceneFrame(const geometry_msgs::PoseStamped& msg, Pose& 
     failure = {RejectReason::kTfFailure, exception.what()};
     return false;
   }
-  if (!finite(pose)) {
-    failure = {RejectReason::kNonFinite, "the transform from '" + frame + "' is not finite"};
-    return false;
-  }
-  return true;
+  return checkScenePose(pose, frame, failure);
 }
 
 bool PoseTransformer::lookupFrame(const std::string& frame, Pose& pose, ros::Time& stamp,
@@ -116,11 +128,7 @@ bool PoseTransformer::lookupFrame(const std::string& frame, Pose& pose, ros::Tim
                exception.what()};
     return false;
   }
-  if (!finite(pose)) {
-    failure = {RejectReason::kNonFinite, "the transform from '" + name + "' is not finite"};
-    return false;
-  }
-  return true;
+  return checkScenePose(pose, name, failure);
 }
 
 }  // namespace pbd_cloth

@@ -267,5 +267,50 @@ TEST(Robustness, SceneFarFromOriginMatchesSceneAtOrigin) {
   EXPECT_NEAR(sim.particles().position[0].z(), expected, 1e-9);
 }
 
+// Live poses that cannot be right are refused by the simulation itself, whoever calls it (the
+// node checks them first and counts them; cloth_bench, the fuzzers and other programs rely on
+// this): NaN, Inf, a zero quaternion, a position beyond 10 km. The gripper, obstacle and link
+// keep their course and the state stays finite; a good pose afterwards is taken.
+TEST(Robustness, ImpossibleLivePosesAreRefusedAndTheStateStaysFinite) {
+  SceneConfig scene;
+  scene.cloth.rows = scene.cloth.cols = 6;
+  scene.cloth.spacing = 0.05;
+  scene.cloth.origin = Eigen::Vector3d::Zero();  // particle 0 at the gripper's start, the origin
+  scene.cloth.pinned = {5};
+  GripperConfig hand;
+  hand.name = "hand";
+  hand.radius = 0.08;
+  scene.grippers.push_back(hand);
+  ObstacleConfig ball;
+  ball.name = "ball";
+  scene.obstacles.push_back(ball);
+  Simulation sim(scene);
+  ASSERT_TRUE(sim.setGrasp(0, true).success);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  std::vector<Pose> bad(4);
+  bad[0].position = Eigen::Vector3d(nan, 0.0, 0.0);
+  bad[1].position = Eigen::Vector3d(0.0, inf, 0.0);
+  bad[2].orientation = Eigen::Quaterniond(0.0, 0.0, 0.0, 0.0);
+  bad[3].position = Eigen::Vector3d(0.0, 0.0, 1e300);
+  for (const Pose& pose : bad) {
+    EXPECT_FALSE(poseProblem(pose).empty());
+    EXPECT_FALSE(sim.setGripperPose(0, pose));
+    EXPECT_FALSE(sim.setObstaclePose(0, pose));
+    sim.step();
+  }
+  EXPECT_NE(poseProblem(bad[3]).find("from the scene origin"), std::string::npos);
+  for (const Vec3& x : sim.particles().position) ASSERT_TRUE(x.allFinite());
+  Pose good;
+  good.position = Eigen::Vector3d(0.1, 0.0, 0.2);
+  good.orientation = Eigen::Quaterniond(2.0, 0.0, 0.0, 0.0);  // not unit: normalised, taken
+  EXPECT_TRUE(poseProblem(good).empty());
+  EXPECT_TRUE(sim.setGripperPose(0, good));
+  EXPECT_TRUE(sim.setObstaclePose(0, good));
+  sim.step();
+  EXPECT_NEAR(sim.gripperPose(0).position.x(), 0.1, 1e-12);
+  EXPECT_NEAR(sim.gripperPose(0).orientation.norm(), 1.0, 1e-12);
+}
+
 }  // namespace
 }  // namespace pbd_cloth

@@ -23,6 +23,7 @@ enum class RejectReason {
   kUnknownGripper,  // ~grasp_by_name names a gripper the scene does not have
   kBadValue,        // a value that cannot be parsed or that the scene validation refuses
   kClockJump,       // ROS time (/clock) went back, e.g. a looping rosbag: the node reset itself
+  kFarFromOrigin,   // a pose beyond kMaxPoseCoordinate (simulation.h) of the scene origin
 };
 
 const char* toString(RejectReason reason);

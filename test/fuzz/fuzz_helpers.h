@@ -1,0 +1,48 @@
+// What the fuzz targets share: the input as text or as a file, and the one rule they check.
+//
+// The rule (issue 13): any input gives a valid scene or a clear error naming the key, file or
+// field: a ConfigError, or false with a reason. Any other exception, a crash, a sanitizer report,
+// a hang (libFuzzer -timeout) or an unbounded allocation (-rss_limit_mb, -malloc_limit_mb) is a
+// finding. A scene that loads is also built and stepped when it is small enough for the fuzzer's
+// pace (kMaxSteppedParticles): building is where sizes turn into allocations.
+#pragma once
+
+#include <unistd.h>
+
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <string>
+
+#include "pbd_cloth/simulation.h"
+
+namespace pbd_cloth {
+namespace fuzz {
+
+constexpr int kMaxSteppedParticles = 20000;
+
+inline std::string text(const std::uint8_t* data, std::size_t size) {
+  return std::string(reinterpret_cast<const char*>(data), size);
+}
+
+// The input written to a file of its own (one per process), with the given extension.
+inline std::string writeFile(const std::uint8_t* data, std::size_t size, const std::string& ext) {
+  const std::string path = "/tmp/pbd_cloth_fuzz_" + std::to_string(::getpid()) + "." + ext;
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out.write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));
+  return path;
+}
+
+// Builds and steps a scene that loaded (and so passed validate()). It must not throw: validate()
+// promised that the scene is good.
+inline void buildAndStep(const SceneConfig& scene, int steps = 2) {
+  const long long particles =
+      scene.cloth.mesh_data ? 0 : static_cast<long long>(scene.cloth.rows) * scene.cloth.cols;
+  if (particles + scene.granular.count > kMaxSteppedParticles) return;
+  Simulation sim(scene);
+  for (int k = 0; k < steps; ++k) sim.step();
+}
+
+}  // namespace fuzz
+}  // namespace pbd_cloth
