@@ -108,6 +108,8 @@ class Simulation {
     bool grasping = false;
     std::vector<int> grasped;                    // particle indices
     std::vector<Eigen::Vector3d> local_offsets;  // grasped particle positions in the gripper frame
+    // Linear velocity over the last step (reported in the state; released particles keep their
+    // own velocity, which includes the gripper's rotation: releaseGrasp).
     Eigen::Vector3d velocity = Eigen::Vector3d::Zero();
     std::size_t next_waypoint = 0;  // first waypoint whose grasp event is pending
   };

@@ -242,12 +242,14 @@ GraspResult Simulation::setGrasp(int gripper, bool grasp) {
   return result;
 }
 
+// A released particle keeps the velocity it had in the gripper: the solver gives a held particle
+// the velocity of its own prescribed path over the last substep, (x_to - x_from) / dt with
+// x = p + R o, i.e. v + (R_to R_from^-1 - I) r / dt = v + omega x r to first order in the step's
+// rotation (a chord, as every velocity here). So a gripper that turns while it lets go throws the
+// far particles faster than the near ones; the gripper's linear velocity alone would not. Until a
+// step has moved it, a particle grasped and released at once keeps its free velocity.
 void Simulation::releaseGrasp(GripperState& gripper) {
-  for (int i : gripper.grasped) {
-    particles_.inverse_mass[i] = 1.0 / particles_.mass[i];
-    // Released particles keep the gripper's velocity.
-    particles_.velocity[i] = gripper.velocity;
-  }
+  for (int i : gripper.grasped) particles_.inverse_mass[i] = 1.0 / particles_.mass[i];
   gripper.grasped.clear();
   gripper.local_offsets.clear();
   gripper.grasping = false;
