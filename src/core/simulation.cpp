@@ -293,6 +293,15 @@ void Simulation::setClothCompliance(double stretch_compliance, double bend_compl
   candidate.cloth.bend_compliance = bend_compliance;
   validate(candidate);
   scene_.cloth = candidate.cloth;
+  // A scene built with bending off (bend_compliance < 0) has no hinges: turning it on builds them
+  // now, at the rest shape the scene was built with, exactly those a build with this compliance
+  // would have, so bending acts from the next step and a reset() keeps it. (Turned off, the hinges
+  // stay and are skipped.) prepare() sizes the solver's multipliers for them; it also clears the
+  // constraint forces of the last step, so gripperForce() reads zero until the next step.
+  if (bend_compliance >= 0.0 && topology_.bend.empty() && !topology_.triangles.empty()) {
+    buildBending(initial_particles_.position, topology_);
+    solver_.prepare(particles_, topology_);
+  }
   solver_.configure(solver_.config(), scene_.cloth);
 }
 
