@@ -53,7 +53,8 @@ namespace pbd_cloth {
 // Figures of the last step.
 struct CollisionStats {
   int particle_pairs = 0;         // particle-particle candidates
-  int vertex_triangle_pairs = 0;  // self-collision candidates (vertex-triangle and edge-edge)
+  int vertex_triangle_pairs = 0;  // self-collision candidates: a vertex near a triangle
+  int edge_edge_pairs = 0;        // self-collision candidates: two edges near each other
   int broad_phase_runs = 0;       // 1, plus one per substep whose particles left their swept boxes
 };
 
