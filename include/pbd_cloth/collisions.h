@@ -7,12 +7,14 @@
 // Position-level friction (seed eq. friction_correction) acts on all three kinds (contact.h).
 //
 // The step, as the solver drives it:
-//   beginStep           broad phase once per step (swept boxes, spatial hash, flat candidate
+//   beginStep           broad phase at the step start (swept boxes, spatial hash, flat candidate
 //                       arrays) and pre-stabilisation of overlaps that exist before the step
 //   setSubstepFraction  obstacles at their interpolated poses for the substep
 //   project             once per constraint pass: particle-particle, self-collision, obstacles,
 //                       bounds (obstacles and bounds last: a pass ends free of penetration into
-//                       them)
+//                       them). The first pass of a substep first checks the predicted positions
+//                       against their swept boxes and, if one left its box, runs the broad phase
+//                       again (below), so contacts may be searched more than once per step
 //   endStep             obstacles arrive at their targets
 //
 // No tunnelling, and how:
