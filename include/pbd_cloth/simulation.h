@@ -130,6 +130,7 @@ class Simulation {
   void moveRobotColliders();
   void followTrajectories(double t_end);
   void updateKinematicTargets(double dt);
+  int changeGrasp(int gripper, bool grasp);
   void releaseGrasp(GripperState& gripper);
   void kinematicSetChanged();
   // setState's check: empty when the state fits this scene, else what does not.
