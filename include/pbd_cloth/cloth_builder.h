@@ -14,6 +14,11 @@ Eigen::Matrix3d rotationFromRpy(const Eigen::Vector3d& rpy);
 // particles get inverse mass 0.
 void buildScene(const SceneConfig& scene, Particles& particles, ClothTopology& topology);
 
+// The bending hinges of the cloth's triangles (grid or mesh, as topology.from_mesh says), their
+// rest shape taken from `rest` (the particles' build positions); replaces any hinges there are.
+// buildScene calls it when cloth.bend_compliance >= 0; Simulation when bending is turned on live.
+void buildBending(const Vec3Array& rest, ClothTopology& topology);
+
 // Isometric bending hinge on edge (x0,x1) with opposite vertices x2, x3, from rest positions.
 // Returns false for a degenerate (zero-area) hinge, which is then skipped.
 bool makeBendConstraint(const Vec3Array& rest, int i0, int i1, int i2, int i3, BendConstraint& out);

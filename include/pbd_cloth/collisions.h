@@ -7,12 +7,14 @@
 // Position-level friction (seed eq. friction_correction) acts on all three kinds (contact.h).
 //
 // The step, as the solver drives it:
-//   beginStep           broad phase once per step (swept boxes, spatial hash, flat candidate
+//   beginStep           broad phase at the step start (swept boxes, spatial hash, flat candidate
 //                       arrays) and pre-stabilisation of overlaps that exist before the step
 //   setSubstepFraction  obstacles at their interpolated poses for the substep
 //   project             once per constraint pass: particle-particle, self-collision, obstacles,
 //                       bounds (obstacles and bounds last: a pass ends free of penetration into
-//                       them)
+//                       them). The first pass of a substep first checks the predicted positions
+//                       against their swept boxes and, if one left its box, runs the broad phase
+//                       again (below), so contacts may be searched more than once per step
 //   endStep             obstacles arrive at their targets
 //
 // No tunnelling, and how:
@@ -53,7 +55,8 @@ namespace pbd_cloth {
 // Figures of the last step.
 struct CollisionStats {
   int particle_pairs = 0;         // particle-particle candidates
-  int vertex_triangle_pairs = 0;  // self-collision candidates (vertex-triangle and edge-edge)
+  int vertex_triangle_pairs = 0;  // self-collision candidates: a vertex near a triangle
+  int edge_edge_pairs = 0;        // self-collision candidates: two edges near each other
   int broad_phase_runs = 0;       // 1, plus one per substep whose particles left their swept boxes
 };
 

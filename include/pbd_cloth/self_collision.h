@@ -70,6 +70,8 @@ class SelfCollision {
   // triangle; edges' closest points interior, edges within a few thicknesses) (m).
   double maxPenetration(const Particles& particles, double thickness) const;
   int pairCount() const { return static_cast<int>(pairs_.size()); }
+  int vertexTrianglePairCount() const { return pairCount() - edge_pair_count_; }
+  int edgeEdgePairCount() const { return edge_pair_count_; }
 
  private:
   void findVertexTrianglePairs(const Particles& particles, const ClothTopology& topology);

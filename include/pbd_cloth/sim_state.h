@@ -7,8 +7,9 @@
 // - substep_start: the positions at the start of the last substep; the particle-particle contact
 //   falls back on it for the direction between two coincident particles at the next step start.
 // - grippers: pose, target, whether a live pose drives them, the particles they hold with their
-//   offsets in the gripper frame, their velocity (released particles take it) and the next
-//   waypoint whose grasp event is pending.
+//   offsets in the gripper frame, their velocity over the last step (reported; a released particle
+//   keeps its own velocity, carried among the particles' velocities) and the next waypoint whose
+//   grasp event is pending.
 // - colliders (the scene's obstacles, then each robot link's collision elements, "<link>/<k>"):
 //   pose, target, enabled, and whether they jump to their next target (enabled again).
 // - robot_links: pose, target, live (off robot.joint_trajectory), enabled.

@@ -110,6 +110,8 @@ class Simulation {
     bool grasping = false;
     std::vector<int> grasped;                    // particle indices
     std::vector<Eigen::Vector3d> local_offsets;  // grasped particle positions in the gripper frame
+    // Linear velocity over the last step (reported in the state; released particles keep their
+    // own velocity, which includes the gripper's rotation: releaseGrasp).
     Eigen::Vector3d velocity = Eigen::Vector3d::Zero();
     std::size_t next_waypoint = 0;  // first waypoint whose grasp event is pending
   };
@@ -130,6 +132,7 @@ class Simulation {
   void moveRobotColliders();
   void followTrajectories(double t_end);
   void updateKinematicTargets(double dt);
+  int changeGrasp(int gripper, bool grasp);
   void releaseGrasp(GripperState& gripper);
   void kinematicSetChanged();
   // setState's check: empty when the state fits this scene, else what does not.

@@ -399,14 +399,23 @@ void buildScene(const SceneConfig& scene, Particles& particles, ClothTopology& t
   if (mesh) {
     topology.triangles = mesh->triangles;
     addMeshStretch(particles.position, topology);
-    if (cloth.bend_compliance >= 0.0) addMeshBending(particles.position, topology);
     addMeshNeighbours(cloth_count, topology);
   } else {
     addTriangles(cloth, topology);
     addStretch(cloth, particles.position, topology);
-    if (cloth.bend_compliance >= 0.0) addBending(particles.position, topology);
   }
+  if (cloth.bend_compliance >= 0.0) buildBending(particles.position, topology);
   if (cloth.tethers) buildTethers(particles, topology, cloth.spacing, topology.tethers);
+}
+
+void buildBending(const Vec3Array& rest, ClothTopology& topology) {
+  topology.bend.clear();
+  topology.bend_rest.clear();
+  if (topology.from_mesh) {
+    addMeshBending(rest, topology);
+  } else {
+    addBending(rest, topology);
+  }
 }
 
 void buildTethers(const Particles& particles, const ClothTopology& topology, double spacing,

@@ -151,8 +151,10 @@ void Collisions::findCandidates(const Particles& particles, const ClothTopology&
     self_collision_pairs_.findPairs(particles, topology, box_lo_, box_hi_, thickness_, step_start);
   }
   stats_.particle_pairs = particle_contacts_.pairCount();
+  const bool self_collision = selfCollisionActive(topology);
   stats_.vertex_triangle_pairs =
-      selfCollisionActive(topology) ? self_collision_pairs_.pairCount() : 0;
+      self_collision ? self_collision_pairs_.vertexTrianglePairCount() : 0;
+  stats_.edge_edge_pairs = self_collision ? self_collision_pairs_.edgeEdgePairCount() : 0;
   ++stats_.broad_phase_runs;
 }
 

@@ -144,6 +144,7 @@ void SelfCollision::findPairs(const Particles& p, const ClothTopology& topology,
   // Edge-edge pairs first, vertex-triangle pairs after them: a repeated broad phase within the
   // step replaces only the latter.
   pairs_.resize(edge_pairs ? 0 : edge_pair_count_);
+  if (edge_pairs) edge_pair_count_ = 0;
   if (topology.triangleCount() == 0) return;
   // Vertex boxes grown by h / 2: two boxes built from them overlap when within h of each other.
   const double half = 0.5 * thickness;

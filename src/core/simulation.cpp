@@ -72,6 +72,9 @@ void Simulation::build() {
   solver_.initializeVelocities(particles_, 1.0 / scene_.step_rate);
   grippers_.assign(scene_.grippers.size(), GripperState());
   for (std::size_t g = 0; g < grippers_.size(); ++g) {
+    // Room for every cloth particle (28 bytes each), so a grasp inside the step never allocates.
+    grippers_[g].grasped.reserve(particles_.cloth_count);
+    grippers_[g].local_offsets.reserve(particles_.cloth_count);
     const auto& trajectory = scene_.grippers[g].trajectory;
     if (!trajectory.empty()) grippers_[g].pose = grippers_[g].target = trajectory.front().pose;
   }
@@ -219,31 +222,16 @@ const Pose& Simulation::gripperPose(int gripper) const { return grippers_[grippe
 bool Simulation::gripperGrasping(int gripper) const { return grippers_[gripper].grasping; }
 
 GraspResult Simulation::setGrasp(int gripper, bool grasp) {
-  GripperState& state = grippers_[gripper];
   const GripperConfig& config = scene_.grippers[gripper];
   GraspResult result;
+  result.grasped_count = changeGrasp(gripper, grasp);
   if (!grasp) {
-    result.grasped_count = static_cast<int>(state.grasped.size());
-    releaseGrasp(state);
     result.success = true;
     result.message = "released " + std::to_string(result.grasped_count) + " particles";
-    kinematicSetChanged();
     return result;
   }
-  releaseGrasp(state);
-  const Pose& pose = state.pose;
-  const Eigen::Quaterniond to_local = pose.orientation.conjugate();
-  for (int i = 0; i < particles_.cloth_count; ++i) {
-    if (initial_particles_.isKinematic(i) || particles_.isKinematic(i)) continue;  // pinned/held
-    if ((particles_.position[i] - pose.position).norm() > config.radius) continue;
-    state.grasped.push_back(i);
-    state.local_offsets.push_back(to_local * (particles_.position[i] - pose.position));
-    particles_.inverse_mass[i] = 0.0;
-    particles_.kinematic_from[i] = particles_.kinematic_to[i] = particles_.position[i];
-  }
-  state.grasping = !state.grasped.empty();
-  result.grasped_count = static_cast<int>(state.grasped.size());
-  result.success = state.grasping;
+  const Pose& pose = grippers_[gripper].pose;
+  result.success = result.grasped_count > 0;
   std::ostringstream message;
   if (result.success) {
     message << "grasped " << result.grasped_count << " particles";
@@ -252,16 +240,44 @@ GraspResult Simulation::setGrasp(int gripper, bool grasp) {
             << config.name << "' at (" << pose.position.transpose() << ")";
   }
   result.message = message.str();
-  kinematicSetChanged();
   return result;
 }
 
-void Simulation::releaseGrasp(GripperState& gripper) {
-  for (int i : gripper.grasped) {
-    particles_.inverse_mass[i] = 1.0 / particles_.mass[i];
-    // Released particles keep the gripper's velocity.
-    particles_.velocity[i] = gripper.velocity;
+// Grasp: every free cloth particle within the radius becomes kinematic, held at its offset in
+// the gripper frame; release: they are free again. Returns how many were grasped (released).
+// Composes no message, so the scripted events inside the step allocate nothing: grasped and
+// local_offsets have room for every cloth particle from build() (kinematicSetChanged's tether
+// rebuild, with cloth.tethers on, still allocates).
+int Simulation::changeGrasp(int gripper, bool grasp) {
+  GripperState& state = grippers_[gripper];
+  const int released = static_cast<int>(state.grasped.size());
+  releaseGrasp(state);
+  if (grasp) {
+    const GripperConfig& config = scene_.grippers[gripper];
+    const Pose& pose = state.pose;
+    const Eigen::Quaterniond to_local = pose.orientation.conjugate();
+    for (int i = 0; i < particles_.cloth_count; ++i) {
+      if (initial_particles_.isKinematic(i) || particles_.isKinematic(i)) continue;  // pinned/held
+      if ((particles_.position[i] - pose.position).norm() > config.radius) continue;
+      state.grasped.push_back(i);
+      state.local_offsets.push_back(to_local * (particles_.position[i] - pose.position));
+      particles_.inverse_mass[i] = 0.0;
+      particles_.kinematic_from[i] = particles_.kinematic_to[i] = particles_.position[i];
+    }
+    state.grasping = !state.grasped.empty();
   }
+  kinematicSetChanged();
+  return grasp ? static_cast<int>(state.grasped.size()) : released;
+}
+
+// A released particle keeps the velocity it had in the gripper: the solver gives a held particle
+// the velocity of its own prescribed path over the last substep, (x_to - x_from) / dt with
+// x = p + R o, i.e. v + (R_to R_from^-1 - I) r / dt = v + omega x r to first order in the step's
+// rotation (a chord, as every velocity here). So a gripper that turns while it lets go throws the
+// far particles faster than the near ones; the gripper's linear velocity alone would not. Until a
+// step has moved it, a particle grasped and released at once keeps its free velocity.
+void Simulation::releaseGrasp(GripperState& gripper) {
+  for (int i : gripper.grasped) particles_.inverse_mass[i] = 1.0 / particles_.mass[i];
   gripper.grasped.clear();
   gripper.local_offsets.clear();
   gripper.grasping = false;
@@ -308,6 +324,15 @@ void Simulation::setClothCompliance(double stretch_compliance, double bend_compl
   candidate.cloth.bend_compliance = bend_compliance;
   validate(candidate);
   scene_.cloth = candidate.cloth;
+  // A scene built with bending off (bend_compliance < 0) has no hinges: turning it on builds them
+  // now, at the rest shape the scene was built with, exactly those a build with this compliance
+  // would have, so bending acts from the next step and a reset() keeps it. (Turned off, the hinges
+  // stay and are skipped.) prepare() sizes the solver's multipliers for them; it also clears the
+  // constraint forces of the last step, so gripperForce() reads zero until the next step.
+  if (bend_compliance >= 0.0 && topology_.bend.empty() && !topology_.triangles.empty()) {
+    buildBending(initial_particles_.position, topology_);
+    solver_.prepare(particles_, topology_);
+  }
   solver_.configure(solver_.config(), scene_.cloth);
 }
 
@@ -329,7 +354,7 @@ void Simulation::followTrajectories(double t_end) {
     while (state.next_waypoint < trajectory.size() &&
            trajectory[state.next_waypoint].t <= time_ + 1e-9) {
       const int grasp = trajectory[state.next_waypoint].grasp;
-      if (grasp >= 0) setGrasp(static_cast<int>(g), grasp == 1);
+      if (grasp >= 0) changeGrasp(static_cast<int>(g), grasp == 1);
       ++state.next_waypoint;
     }
     state.target = trajectoryPose(trajectory, t_end);

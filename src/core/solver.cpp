@@ -462,7 +462,8 @@ void Solver::step(double dt, Particles& p, const ClothTopology& topology, Collis
   p.step_start = p.position;
   if (config_.ordering == Ordering::kJacobi) countJacobiConstraints(p, topology);
 
-  // Find contacts once per step; every substep enforces them (Jolt's "collide" phase).
+  // Find contacts at the step start; every substep enforces them (Jolt's "collide" phase).
+  // Collisions::project searches again in a substep whose prediction left the swept boxes.
   auto t0 = Clock::now();
   collisions.beginStep(p, topology, dt);
   auto t1 = Clock::now();

@@ -111,6 +111,55 @@ TEST(Allocations, StepWithCollisionsAllocatesNothingAfterWarmUp) {
   }
 }
 
+// Scripted grasps and releases fire inside the step (followTrajectories): a gripper takes hold of
+// the loose corner of a cloth pinned at one corner, lifts it, lets go, and takes hold again, all
+// within the counted steps (after 3 warm-up steps at t = 0.05 s). Tethers off: rebuilding them
+// for the new kinematic set allocates (simulation.cpp, changeGrasp).
+TEST(Allocations, ScriptedGraspAndReleaseAllocateNothing) {
+  for (Method method : {Method::kXpbd, Method::kVerlet}) {
+    SceneConfig scene = test::clothScene(20, 20, 0.03, method);
+    scene.cloth.pinned = {0};
+    scene.cloth.bend_compliance = 1e-3;
+    scene.solver.gravity.setZero();
+    scene.solver.substeps = 4;
+    const Eigen::Vector3d corner(19 * 0.03, 0.0, 0.0);  // particle 19, the loose top corner
+    GripperConfig gripper;
+    gripper.name = "hand";
+    gripper.radius = 0.05;  // particles 18, 19, 38 and 39; the next ones are 6 cm away
+    const auto waypoint = [&corner](double t, double lift, int grasp) {
+      Waypoint w;
+      w.t = t;
+      w.pose.position = corner + Eigen::Vector3d(0.0, 0.0, lift);
+      w.grasp = grasp;
+      return w;
+    };
+    // Each lift ends 0.05 s before the release, so the corner is at rest when it is let go and
+    // still within reach for the second grasp.
+    gripper.trajectory = {waypoint(0.0, 0.0, -1), waypoint(0.1, 0.0, 1),  waypoint(0.25, 0.02, -1),
+                          waypoint(0.3, 0.02, 0), waypoint(0.4, 0.02, 1), waypoint(0.55, 0.04, -1),
+                          waypoint(0.6, 0.04, 0)};
+    scene.grippers = {gripper};
+    Simulation sim(scene);
+    for (int k = 0; k < 3; ++k) sim.step();
+    ASSERT_FALSE(sim.gripperGrasping(0));
+    int grasps = 0, releases = 0;
+    bool holding = false;
+    g_allocations = 0;
+    for (int k = 0; k < 42; ++k) {  // to t = 0.75 s
+      g_counting = true;
+      sim.step();
+      g_counting = false;
+      if (sim.gripperGrasping(0) != holding) {
+        holding = !holding;
+        ++(holding ? grasps : releases);
+      }
+    }
+    EXPECT_EQ(grasps, 2) << toString(method) << ": the script's grasps did not happen";
+    EXPECT_EQ(releases, 2) << toString(method);
+    EXPECT_EQ(g_allocations.load(), 0) << toString(method);
+  }
+}
+
 // Forward kinematics runs every step: with `out` at its size it allocates nothing (a revolute,
 // prismatic, fixed and mimic joint on the way).
 TEST(Allocations, RobotLinkPosesAllocateNothing) {

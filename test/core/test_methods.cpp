@@ -179,6 +179,50 @@ TEST(Methods, GraspedParticlesFollowGripperSmoothlyAcrossSubsteps) {
   EXPECT_LT(p.position[0].z(), end.pose.position.z() - 0.01);  // free again: it falls
 }
 
+// A released particle keeps its own velocity in the gripper, the turning included: v + omega x r.
+// A rope of 4 particles 5 cm apart, all held by a gripper at the first one that moves at
+// v = (0.1, 0, 0.2) m/s while it turns about z at 2 rad/s, is let go after 1 s. Each particle's
+// velocity is the chord of its path over the last step, which lags the tangent omega x r by half
+// the step's turn: tolerance 0.6 |omega|^2 r dt (0.5 to first order). The gripper's linear velocity
+// alone, as before, misses the far particle by |omega| r = 0.3 m/s.
+TEST(Methods, ReleasedParticlesKeepTheirVelocityIncludingTheGrippersRotation) {
+  const Vec3 v(0.1, 0.0, 0.2);
+  const double omega = 2.0, dt = 1.0 / 60.0;
+  for (Method method : {Method::kXpbd, Method::kPbd, Method::kVerlet, Method::kMassSpring}) {
+    SceneConfig scene = test::clothScene(1, 4, 0.05, method);
+    scene.solver.gravity.setZero();
+    scene.solver.substeps = 4;
+    GripperConfig gripper;
+    gripper.name = "hand";
+    gripper.radius = 0.16;
+    Waypoint start, end;
+    start.t = 0.0;
+    start.grasp = 1;
+    end.t = 1.0;
+    end.pose.position = v;
+    end.pose.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(omega, Vec3::UnitZ()));
+    gripper.trajectory = {start, end};
+    scene.grippers = {gripper};
+    Simulation sim(scene);
+    while (sim.time() < 1.0 - 0.5 * dt) sim.step();
+    ASSERT_TRUE(sim.gripperGrasping(0)) << toString(method);
+    ASSERT_EQ(sim.setGrasp(0, false).grasped_count, 4) << toString(method);
+
+    const Particles& p = sim.particles();
+    const Vec3 centre = sim.gripperPose(0).position;
+    const Vec3 spin = omega * Vec3::UnitZ();
+    for (int i = 0; i < 4; ++i) {
+      const Vec3 r = p.position[i] - centre;
+      const Vec3 expected = v + spin.cross(r);
+      const double tolerance = 0.6 * omega * omega * r.norm() * dt + 1e-9;
+      EXPECT_NEAR((p.velocity[i] - expected).norm(), 0.0, tolerance)
+          << toString(method) << " particle " << i << " at r = " << r.norm() << " m: velocity "
+          << p.velocity[i].transpose() << ", v + omega x r = " << expected.transpose();
+    }
+    EXPECT_GT((p.velocity[3] - v).norm(), 0.25) << toString(method) << ": the turn is left out";
+  }
+}
+
 // Damping dv/dt = -c v: a free particle's speed decays as e^{-c t} whatever the substep count
 // (the factor e^{-c h} per substep composes exactly), and gravity is not damped at rest.
 TEST(Methods, DampingDecaysVelocityExponentiallyForAnySubstepCount) {

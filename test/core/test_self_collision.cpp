@@ -8,6 +8,7 @@
 #include <cstdio>
 
 #include "collision_scenes.h"
+#include "pbd_cloth/cloth_mesh.h"
 #include "pbd_cloth/metrics.h"
 #include "pbd_cloth/simulation.h"
 
@@ -133,6 +134,39 @@ TEST(SelfCollision, DropOntoThinRodNeverIntersects) {
   EXPECT_LT(lowest, -0.04);
   EXPECT_GT(lowest, -0.16);
   EXPECT_TRUE(sim.computeMetrics().finite);
+}
+
+// CollisionStats counts the two kinds of self-collision candidates apart. Two triangles that share
+// no vertex, one above the other in the same outline, 0.6 h apart (within the thickness, so every
+// box reaches the other layer): each of the 3 + 3 vertices is a candidate against the other
+// layer's triangle (6 vertex-triangle pairs), and each of the 3 edges against each of the other's
+// 3 (9 edge-edge pairs: the edges of one triangle meet at its corners, so in the outline every
+// edge touches every edge of the other).
+TEST(SelfCollision, StatsCountVertexTriangleAndEdgeEdgePairsApart) {
+  const double h = 0.005;
+  auto mesh = std::make_shared<ClothMesh>();
+  mesh->source = "two parallel triangles";
+  for (const double z : {0.0, 0.6 * h}) {
+    mesh->vertices.emplace_back(0.0, 0.0, z);
+    mesh->vertices.emplace_back(0.1, 0.0, z);
+    mesh->vertices.emplace_back(0.0, 0.1, z);
+  }
+  mesh->triangles = {0, 1, 2, 3, 4, 5};
+  mesh->triangle_face = {1, 2};
+  SceneConfig scene = test::clothScene(2, 2, 0.1, Method::kXpbd);
+  scene.cloth.mesh = mesh->source;
+  scene.cloth.mesh_data = mesh;
+  scene.cloth.origin = Vec3(0.0, 0.0, 1.0);
+  scene.cloth.rpy = Vec3::Zero();
+  scene.cloth.thickness = h;
+  scene.cloth.self_collision = true;
+  scene.cloth.pinned.clear();
+  scene.solver.gravity = Vec3::Zero();
+  Simulation sim(scene);
+  sim.step();
+  const CollisionStats& stats = sim.collisions().stats();
+  EXPECT_EQ(stats.vertex_triangle_pairs, 6);
+  EXPECT_EQ(stats.edge_edge_pairs, 9);
 }
 
 }  // namespace

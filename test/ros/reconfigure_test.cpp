@@ -1,6 +1,7 @@
 // Live tuning of cloth_node through dynamic_reconfigure (reconfigure.test, small_scene.yaml):
-// the server starts from the scene, a change shows in ~state from the next steps on, and a value
-// the scene validation refuses is counted and snaps back.
+// the server starts from the scene, a change shows in ~state from the next steps on, a value the
+// scene validation refuses is counted and snaps back, and a value outside Solver.cfg's range is
+// clamped by dynamic_reconfigure before the node sees it (applied clamped, not counted).
 #include <string>
 
 #include <dynamic_reconfigure/Config.h>
@@ -130,6 +131,27 @@ TEST(Reconfigure, RefusedValueIsCountedAndSnapsBack) {
     return s.stats.rejected_inputs > before.stats.rejected_inputs;
   }));
   EXPECT_TRUE(pbd_cloth_test::allFinite(after));
+}
+
+// dynamic_reconfigure's server clamps a request to Solver.cfg's range before the callback: the
+// node gets relaxation 1.99 (the cfg's maximum) for 5.0, applies it, answers with it, and has
+// nothing to refuse or count (README, "Bad input").
+TEST(Reconfigure, OutOfRangeValueIsClampedNotCounted) {
+  StateRecorder states(node() + "/state");
+  ClothState before;
+  ASSERT_TRUE(states.waitForNext(before, 10.0));
+  double answered = 0.0;
+  ASSERT_TRUE(findDouble(reconfigure(doubleRequest("relaxation", 5.0)), "relaxation", answered));
+  EXPECT_DOUBLE_EQ(answered, 1.99) << "not clamped to Solver.cfg's maximum";
+  double parameter = 0.0;
+  EXPECT_TRUE(ros::NodeHandle(node()).getParam("relaxation", parameter));
+  EXPECT_DOUBLE_EQ(parameter, 1.99);
+  // Ten more states (1/3 s at 30 Hz): the count stays where it was.
+  ClothState after;
+  for (int k = 0; k < 10; ++k) ASSERT_TRUE(states.waitForNext(after, 5.0));
+  EXPECT_EQ(after.stats.rejected_inputs, before.stats.rejected_inputs);
+  EXPECT_TRUE(pbd_cloth_test::allFinite(after));
+  reconfigure(doubleRequest("relaxation", 1.0));
 }
 
 }  // namespace
