@@ -104,6 +104,8 @@ TEST(SceneYaml, HangingYamlListsEveryKeyTheReaderAccepts) {
       {"robot", "{robot: {zz_unknown: 1}}"},
       {"robot.friction", "{robot: {friction: {zz_unknown: 1}}}"},
       {"robot.joint_trajectory[]", "{robot: {joint_trajectory: [{zz_unknown: 1}]}}"},
+      {"cameras[]", "{cameras: [{zz_unknown: 1}]}"},
+      {"cameras[].range", "{cameras: [{range: {zz_unknown: 1}}]}"},
   };
   std::map<std::string, KeySet> accepted;
   for (const auto& probe : probes) accepted[probe.first] = readerKeys(probe.second);
