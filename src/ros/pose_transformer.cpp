@@ -78,7 +78,7 @@ bool PoseTransformer::toSceneFrame(const geometry_msgs::PoseStamped& msg, Pose& 
   const std::string frame = tf2FrameName(msg.header.frame_id);
   if (frame.empty() || frame == config_.frame_id) {
     pose = local;
-    return true;
+    return checkScenePose(pose, config_.frame_id, failure);
   }
 
   // Waited for in wall time, not with canTransform's own timeout: that one counts and sleeps in

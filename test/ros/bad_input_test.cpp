@@ -108,6 +108,14 @@ TEST_F(BadPoseTest, ZeroQuaternion) {
   expectGripperKeptItsPose();
 }
 
+// Finite but absurd: 1e300 m would overflow the step's squares; anything beyond 10 km of the scene
+// origin is refused as "far from the origin" (simulation.h kMaxPoseCoordinate).
+TEST_F(BadPoseTest, PoseFarFromTheOrigin) {
+  expectRejected([this] { gripper_.publish(poseStamped("world", point(0.0, 1e300, 0.5))); });
+  expectGripperKeptItsPose();
+  expectRejected([this] { ball_.publish(poseStamped("world", point(2e4, 0.0, 0.5))); });
+}
+
 TEST_F(BadPoseTest, UnknownFrame) {
   expectRejected([this] { gripper_.publish(poseStamped("no_such_frame", point(0.0, 0.0, 0.5))); });
   expectGripperKeptItsPose();
