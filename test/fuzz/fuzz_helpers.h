@@ -4,7 +4,9 @@
 // field: a ConfigError, or false with a reason. Any other exception, a crash, a sanitizer report,
 // a hang (libFuzzer -timeout) or an unbounded allocation (-rss_limit_mb, -malloc_limit_mb) is a
 // finding. A scene that loads is also built and stepped when it is small enough for the fuzzer's
-// pace (kMaxSteppedParticles): building is where sizes turn into allocations.
+// pace (kMaxSteppedParticles, kMaxSteppedPasses): building is where sizes turn into allocations.
+// A valid scene of a million particles or of 1000 x 1000 passes per step is slow, not wrong; the
+// fuzzer would report it as a hang.
 #pragma once
 
 #include <unistd.h>
@@ -20,7 +22,8 @@
 namespace pbd_cloth {
 namespace fuzz {
 
-constexpr int kMaxSteppedParticles = 20000;
+constexpr int kMaxSteppedParticles = 2000;
+constexpr int kMaxSteppedPasses = 200;  // substeps x iterations
 
 inline std::string text(const std::uint8_t* data, std::size_t size) {
   return std::string(reinterpret_cast<const char*>(data), size);
@@ -36,10 +39,13 @@ inline std::string writeFile(const std::uint8_t* data, std::size_t size, const s
 
 // Builds and steps a scene that loaded (and so passed validate()). It must not throw: validate()
 // promised that the scene is good.
-inline void buildAndStep(const SceneConfig& scene, int steps = 2) {
+inline void buildAndStep(const SceneConfig& scene, int steps = 1) {
   const long long particles =
       scene.cloth.mesh_data ? 0 : static_cast<long long>(scene.cloth.rows) * scene.cloth.cols;
   if (particles + scene.granular.count > kMaxSteppedParticles) return;
+  if (static_cast<long long>(scene.solver.substeps) * scene.solver.iterations > kMaxSteppedPasses) {
+    return;
+  }
   Simulation sim(scene);
   for (int k = 0; k < steps; ++k) sim.step();
 }
