@@ -107,6 +107,11 @@ class Collisions {
   void findCandidatesNow(const Particles& particles, const ClothTopology& topology);
 
   const CollisionStats& stats() const { return stats_; }
+  // Sum over the step's passes of each particle-particle and self-contact's multiplier times its
+  // gradient at the kinematic particles it touches (kg m; zero elsewhere): what the contact would
+  // have moved them by, times their mass. The solver turns it into their constraint force.
+  // (Obstacles and bounds leave kinematic particles alone.)
+  const Vec3Array& kinematicReaction() const { return kinematic_reaction_; }
   // Largest speed at which pre-existing overlaps are separated (m/s), 1 by default.
   void setMaxSeparationSpeed(double speed) { max_separation_speed_ = speed; }
 
@@ -160,6 +165,7 @@ class Collisions {
   ParticleContacts particle_contacts_;
   SelfCollision self_collision_pairs_;
   CollisionStats stats_;
+  Vec3Array kinematic_reaction_;
 };
 
 }  // namespace pbd_cloth

@@ -39,7 +39,10 @@ class ParticleContacts {
 
   // One projection pass over the candidate pairs, each followed by its friction (window of the
   // step, see ContactState); returns the largest correction. `substep` and `step` are stamps.
-  double project(Particles& particles, int substep, int step, const FrictionConfig& friction);
+  // A kinematic particle of a pair gets the pair's multiplier times its gradient added to
+  // `reaction` (Collisions::kinematicReaction).
+  double project(Particles& particles, int substep, int step, const FrictionConfig& friction,
+                 Vec3Array& reaction);
 
   // Deepest overlap (r_i + r_j - |p_i - p_j|) over the candidate pairs (m).
   double maxPenetration(const Particles& particles) const;

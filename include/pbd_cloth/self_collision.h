@@ -62,9 +62,11 @@ class SelfCollision {
   // (allowanceFor, `slop` a fraction of h), measured in `positions` (those of the step start).
   void measureAllowances(const Vec3Array& positions, double thickness, double slop);
 
-  // One projection pass, then friction; returns the largest correction.
+  // One projection pass, then friction; returns the largest correction. Kinematic particles of a
+  // contact get its multiplier times their gradient added to `reaction`
+  // (Collisions::kinematicReaction).
   double project(Particles& particles, double thickness, int substep,
-                 const FrictionConfig& friction);
+                 const FrictionConfig& friction, Vec3Array& reaction);
 
   // Deepest violation h - s distance over the contacts that are active (vertex over its
   // triangle; edges' closest points interior, edges within a few thicknesses) (m).

@@ -98,6 +98,7 @@ void Collisions::prepare(const Particles& particles, const ClothTopology& topolo
   mesh_point_.assign(obstacle_contacts_.size(), Vec3::Zero());
   box_lo_.assign(n, Vec3::Zero());
   box_hi_.assign(n, Vec3::Zero());
+  kinematic_reaction_.assign(n, Vec3::Zero());
   particle_contacts_.reserve(particles);
   self_collision_pairs_.reserve(particles, topology);
   substep_ = step_ = 0;
@@ -171,6 +172,7 @@ void Collisions::beginStep(Particles& particles, const ClothTopology& topology, 
   ++step_;
   stats_.broad_phase_runs = 0;
   checked_substep_ = -1;
+  std::fill(kinematic_reaction_.begin(), kinematic_reaction_.end(), Vec3::Zero());
   for (std::size_t k = 0; k < obstacles_.size(); ++k) {
     frame_begin_[k] = frame_end_[k] = frameFromPose(obstacles_[k].pose);
   }
@@ -236,12 +238,13 @@ double Collisions::project(Particles& particles, const ClothTopology& topology) 
   }
   double max_change = 0.0;
   if (particle_contacts) {
-    max_change =
-        std::max(max_change, particle_contacts_.project(particles, substep_, step_, friction_));
+    max_change = std::max(max_change, particle_contacts_.project(particles, substep_, step_,
+                                                                 friction_, kinematic_reaction_));
   }
   if (self_collision) {
-    max_change = std::max(
-        max_change, self_collision_pairs_.project(particles, thickness_, substep_, friction_));
+    max_change =
+        std::max(max_change, self_collision_pairs_.project(particles, thickness_, substep_,
+                                                           friction_, kinematic_reaction_));
   }
   max_change = std::max(max_change, projectObstacles(particles));
   max_change = std::max(max_change, projectBounds(particles));

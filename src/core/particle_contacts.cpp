@@ -19,6 +19,13 @@ Vec3 separationDirection(const Particles& p, int i, int j, const Vec3& delta, do
   return length > kMinDistance ? Vec3(before / length) : Vec3::UnitZ();
 }
 
+// A pair's multiplier (vector) `lambda` moves i by w_i lambda and j by -w_j lambda; a kinematic end
+// stays, and lambda (i) or -lambda (j) is its reaction.
+void addReaction(const Particles& p, int i, int j, const Vec3& lambda, Vec3Array& reaction) {
+  if (p.inverse_mass[i] == 0.0) reaction[i] += lambda;
+  if (p.inverse_mass[j] == 0.0) reaction[j] -= lambda;
+}
+
 }  // namespace
 
 void ParticleContacts::reserve(const Particles& particles) {
@@ -83,7 +90,7 @@ void ParticleContacts::measureAllowances(const Particles& p, const Vec3Array& x,
 }
 
 double ParticleContacts::project(Particles& p, int substep, int step,
-                                 const FrictionConfig& friction) {
+                                 const FrictionConfig& friction, Vec3Array& reaction) {
   double max_change = 0.0;
   for (ParticlePair& pair : pairs_) {
     const int i = pair.i, j = pair.j;
@@ -106,6 +113,7 @@ double ParticleContacts::project(Particles& p, int substep, int step,
       const double push = contactIncrement(c, state);
       p.position[i] += (wi / w * push) * n;
       p.position[j] -= (wj / w * push) * n;
+      addReaction(p, i, j, (push / w) * n, reaction);
       state.normal = n;
       max_change = std::max(max_change, std::abs(push) * std::max(wi, wj) / w);
     }
@@ -114,6 +122,7 @@ double ParticleContacts::project(Particles& p, int substep, int step,
       const Vec3 correction = frictionCorrection(relative, state, friction);
       p.position[i] += (wi / w) * correction;
       p.position[j] -= (wj / w) * correction;
+      addReaction(p, i, j, correction / w, reaction);
     }
   }
   return max_change;

@@ -96,12 +96,16 @@ double inverseMass(const SelfContactPair& pair, const ContactGeometry& g, const 
 }
 
 // Moves the four points so that sum_k c_k x_k changes by `change` (a vector): x_k += w_k c_k
-// change / w.
+// change / w. With `reaction`, a kinematic point, which stays, gets c_k change / w there (its
+// gradient times the multiplier).
 void distribute(const SelfContactPair& pair, const ContactGeometry& g, double w, const Vec3& change,
-                Particles& p) {
+                Particles& p, Vec3Array* reaction = nullptr) {
   for (int k = 0; k < 4; ++k) {
     const int i = pair.index[k];
     p.position[i] += (p.inverse_mass[i] * g.coefficient[k] / w) * change;
+    if (reaction != nullptr && p.inverse_mass[i] == 0.0) {
+      (*reaction)[i] += (g.coefficient[k] / w) * change;
+    }
   }
 }
 
@@ -265,7 +269,7 @@ void SelfCollision::measureAllowances(const Vec3Array& x, double thickness, doub
 }
 
 double SelfCollision::project(Particles& p, double thickness, int substep,
-                              const FrictionConfig& friction) {
+                              const FrictionConfig& friction, Vec3Array& reaction) {
   double max_change = 0.0;
   for (SelfContactPair& pair : pairs_) {
     ContactState& state = pair.state;
@@ -302,7 +306,7 @@ double SelfCollision::project(Particles& p, double thickness, int substep,
       // that grew without bound in the drape scene).
       const double push = contactIncrement(std::max(c, -kMaxPush * thickness), state);
       state.normal = pair.side * g.normal;
-      distribute(pair, g, w, push * state.normal, p);
+      distribute(pair, g, w, push * state.normal, p, &reaction);
       max_change = std::max(max_change, std::abs(push));
     }
     if (state.frictionDepth() > 0.0) {
@@ -311,7 +315,7 @@ double SelfCollision::project(Particles& p, double thickness, int substep,
         const int i = pair.index[k];
         relative += g.coefficient[k] * (p.position[i] - p.substep_start[i]);
       }
-      distribute(pair, g, w, frictionCorrection(relative, state, friction), p);
+      distribute(pair, g, w, frictionCorrection(relative, state, friction), p, &reaction);
     }
   }
   return max_change;
