@@ -146,7 +146,7 @@ void Collisions::computeSweptBoxes(const Particles& p, double time_left) {
 void Collisions::findCandidates(const Particles& particles, const ClothTopology& topology,
                                 bool step_start) {
   if (particleContactsActive(particles)) {
-    particle_contacts_.findPairs(particles, box_lo_, box_hi_);
+    particle_contacts_.findPairs(particles, box_lo_, box_hi_, !step_start);
   }
   if (selfCollisionActive(topology)) {
     self_collision_pairs_.findPairs(particles, topology, box_lo_, box_hi_, thickness_, step_start);

@@ -35,10 +35,37 @@ void ParticleContacts::reserve(const Particles& particles) {
   grown_hi_.reserve(n);
   const int granular = n - particles.cloth_count;
   pairs_.reserve(16 * static_cast<std::size_t>(granular));
+  previous_.reserve(pairs_.capacity());
 }
 
-void ParticleContacts::findPairs(const Particles& p, const Vec3Array& lo, const Vec3Array& hi) {
+void ParticleContacts::findPairs(const Particles& p, const Vec3Array& lo, const Vec3Array& hi,
+                                 bool keep_states) {
+  // The old list is kept aside (a swap: no copy, no allocation) to hand its states on.
+  if (keep_states) pairs_.swap(previous_);
   pairs_.clear();
+  findNewPairs(p, lo, hi);
+  if (keep_states) carryStates();
+}
+
+// A contact found again keeps what it has measured so far in this step: without it, a search
+// within the step (a particle left its swept box) would reopen every friction window at that
+// substep, forgetting the slip still to be caught up and the depth resolved, and a resting pile
+// would creep by as much each time. Both lists are ordered by i (the query loop): the old pairs
+// of each new pair's i are a short range found by bisection.
+void ParticleContacts::carryStates() {
+  const auto by_first = [](const ParticlePair& pair, int i) { return pair.i < i; };
+  for (ParticlePair& pair : pairs_) {
+    auto old = std::lower_bound(previous_.begin(), previous_.end(), pair.i, by_first);
+    for (; old != previous_.end() && old->i == pair.i; ++old) {
+      if (old->j == pair.j) {
+        pair.state = old->state;
+        break;
+      }
+    }
+  }
+}
+
+void ParticleContacts::findNewPairs(const Particles& p, const Vec3Array& lo, const Vec3Array& hi) {
   const int n = p.size();
   if (n == p.cloth_count) return;  // no granular particles
   grown_lo_.resize(n);

@@ -140,13 +140,15 @@ void SelfCollision::reserve(const Particles& particles, const ClothTopology& top
   // Typical scenes need 2-4 candidates per triangle and edge; a cloth falling fast into a fold
   // needs more, and capacity then grows once and stays.
   pairs_.reserve(8 * static_cast<std::size_t>(triangles + edges));
+  previous_.reserve(pairs_.capacity());
 }
 
 void SelfCollision::findPairs(const Particles& p, const ClothTopology& topology,
                               const Vec3Array& lo, const Vec3Array& hi, double thickness,
                               bool edge_pairs) {
   // Edge-edge pairs first, vertex-triangle pairs after them: a repeated broad phase within the
-  // step replaces only the latter.
+  // step replaces only the latter, and keeps the old ones aside to hand their states on.
+  if (!edge_pairs) previous_.assign(pairs_.begin() + edge_pair_count_, pairs_.end());
   pairs_.resize(edge_pairs ? 0 : edge_pair_count_);
   if (topology.triangleCount() == 0) return;
   // Vertex boxes grown by h / 2: two boxes built from them overlap when within h of each other.
@@ -163,6 +165,25 @@ void SelfCollision::findPairs(const Particles& p, const ClothTopology& topology,
     edge_pair_count_ = static_cast<int>(pairs_.size());
   }
   findVertexTrianglePairs(p, topology);
+  if (!edge_pairs) carryVertexTriangleStates();
+}
+
+// A vertex-triangle contact found again within the step keeps its side (frozen while the vertex is
+// over the triangle, where the step-start side a new pair gets may no longer be the one it is
+// held to) and its contact state. Both lists are ordered by vertex (the query loop): the old pairs
+// of each new pair's vertex are a short range found by bisection.
+void SelfCollision::carryVertexTriangleStates() {
+  const auto by_vertex = [](const SelfContactPair& pair, int v) { return pair.index[0] < v; };
+  for (auto pair = pairs_.begin() + edge_pair_count_; pair != pairs_.end(); ++pair) {
+    auto old = std::lower_bound(previous_.begin(), previous_.end(), pair->index[0], by_vertex);
+    for (; old != previous_.end() && old->index[0] == pair->index[0]; ++old) {
+      if (std::equal(old->index + 1, old->index + 4, pair->index + 1)) {
+        pair->side = old->side;
+        pair->state = old->state;
+        break;
+      }
+    }
+  }
 }
 
 // Triangles are hashed (each in the cells its box covers) and every vertex queries its small
