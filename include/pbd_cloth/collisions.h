@@ -32,8 +32,10 @@
 //   radius). After each substep's prediction the particles are checked against their boxes; if one
 //   left its box the particle-particle and vertex-triangle candidates are searched again for the
 //   rest of the step (edge-edge candidates, a safety net behind vertex-triangle, stay those of
-//   the step start). Self-contacts keep each vertex (edge) on the side of the triangle (edge) it
-//   was on, so a vertex pushed through a cloth layer is pulled back, never out of the far side.
+//   the step start). A contact found again keeps its state (friction window, its base point and
+//   the depth resolved in it; a self-contact's side), so the search changes nothing for it.
+//   Self-contacts keep each vertex (edge) on the side of the triangle (edge) it was on, so a vertex
+//   pushed through a cloth layer is pulled back, never out of the far side.
 // - Initial overlaps: at each step start, pre-stabilisation separates contacts overlapping by more
 //   than a slop by at most max_separation_speed * dt, on positions before the prediction, so the
 //   separation adds no velocity (Macklin et al. 2014, sec. 4.4). What remains is only kept from
@@ -110,6 +112,11 @@ class Collisions {
   void findCandidatesNow(const Particles& particles, const ClothTopology& topology);
 
   const CollisionStats& stats() const { return stats_; }
+  // Sum over the step's passes of each particle-particle and self-contact's multiplier times its
+  // gradient at the kinematic particles it touches (kg m; zero elsewhere): what the contact would
+  // have moved them by, times their mass. The solver turns it into their constraint force.
+  // (Obstacles and bounds leave kinematic particles alone.)
+  const Vec3Array& kinematicReaction() const { return kinematic_reaction_; }
   // Largest speed at which pre-existing overlaps are separated (m/s), 1 by default.
   void setMaxSeparationSpeed(double speed) { max_separation_speed_ = speed; }
 
@@ -163,6 +170,7 @@ class Collisions {
   ParticleContacts particle_contacts_;
   SelfCollision self_collision_pairs_;
   CollisionStats stats_;
+  Vec3Array kinematic_reaction_;
 };
 
 }  // namespace pbd_cloth

@@ -24,8 +24,10 @@ class ParticleContacts {
 
   // Broad phase, once per step: every pair whose swept boxes [lo, hi] (the motion bound of the
   // step), grown by the radii, overlap. All particles are hashed (cell: the mean box) and each
-  // granular particle queries its box.
-  void findPairs(const Particles& particles, const Vec3Array& lo, const Vec3Array& hi);
+  // granular particle queries its box. `keep_states` (a search again within the step): a pair
+  // that was listed before keeps its contact state (friction window, its base and depth).
+  void findPairs(const Particles& particles, const Vec3Array& lo, const Vec3Array& hi,
+                 bool keep_states = false);
 
   // Pre-stabilisation (Macklin et al. 2014, sec. 4.4): one pass that pushes pairs overlapping by
   // more than the slop (a fraction of r_i + r_j) apart by at most max_shift each, on the positions
@@ -39,17 +41,24 @@ class ParticleContacts {
 
   // One projection pass over the candidate pairs, each followed by its friction (window of the
   // step, see ContactState); returns the largest correction. `substep` and `step` are stamps.
-  double project(Particles& particles, int substep, int step, const FrictionConfig& friction);
+  // A kinematic particle of a pair gets the pair's multiplier times its gradient added to
+  // `reaction` (Collisions::kinematicReaction).
+  double project(Particles& particles, int substep, int step, const FrictionConfig& friction,
+                 Vec3Array& reaction);
 
   // Deepest overlap (r_i + r_j - |p_i - p_j|) over the candidate pairs (m).
   double maxPenetration(const Particles& particles) const;
   int pairCount() const { return static_cast<int>(pairs_.size()); }
 
  private:
+  void findNewPairs(const Particles& particles, const Vec3Array& lo, const Vec3Array& hi);
+  void carryStates();
+
   SpatialHash hash_;
   Vec3Array grown_lo_;  // swept boxes grown by the particle radius
   Vec3Array grown_hi_;
   std::vector<ParticlePair> pairs_;
+  std::vector<ParticlePair> previous_;  // the list before a search within the step
 };
 
 }  // namespace pbd_cloth

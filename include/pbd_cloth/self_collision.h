@@ -51,7 +51,8 @@ class SelfCollision {
   // of edges of cells that are not neighbours whose swept boxes come within h. The sides come
   // from the step-start positions. A repeated broad phase within the step (a particle left its
   // box) passes edge_pairs = false: it renews the vertex-triangle pairs, the primary contacts, and
-  // keeps the edge-edge pairs of the step start, whose search costs several times more.
+  // keeps the edge-edge pairs of the step start, whose search costs several times more; a
+  // vertex-triangle pair found again keeps its side and contact state.
   void findPairs(const Particles& particles, const ClothTopology& topology, const Vec3Array& lo,
                  const Vec3Array& hi, double thickness, bool edge_pairs);
 
@@ -62,9 +63,11 @@ class SelfCollision {
   // (allowanceFor, `slop` a fraction of h), measured in `positions` (those of the step start).
   void measureAllowances(const Vec3Array& positions, double thickness, double slop);
 
-  // One projection pass, then friction; returns the largest correction.
+  // One projection pass, then friction; returns the largest correction. Kinematic particles of a
+  // contact get its multiplier times their gradient added to `reaction`
+  // (Collisions::kinematicReaction).
   double project(Particles& particles, double thickness, int substep,
-                 const FrictionConfig& friction);
+                 const FrictionConfig& friction, Vec3Array& reaction);
 
   // Deepest violation h - s distance over the contacts that are active (vertex over its
   // triangle; edges' closest points interior, edges within a few thicknesses) (m).
@@ -75,6 +78,7 @@ class SelfCollision {
 
  private:
   void findVertexTrianglePairs(const Particles& particles, const ClothTopology& topology);
+  void carryVertexTriangleStates();
   void findEdgeEdgePairs(const Particles& particles, const ClothTopology& topology);
 
   std::vector<std::array<int, 2>> edges_;
@@ -88,6 +92,7 @@ class SelfCollision {
   Vec3Array edge_hi_;
   std::vector<SelfContactPair> pairs_;  // edge-edge pairs first, then vertex-triangle pairs
   int edge_pair_count_ = 0;
+  std::vector<SelfContactPair> previous_;  // vertex-triangle pairs before a search within the step
 };
 
 }  // namespace pbd_cloth

@@ -55,7 +55,10 @@ class Simulation {
   const Pose& gripperPose(int gripper) const;
   bool gripperGrasping(int gripper) const;
   GraspResult setGrasp(int gripper, bool grasp);
-  // Force (N) the cloth pulls on the gripper, from the constraint corrections of the last step.
+  // Force (N) the held particles exerted on the gripper over the last step (impulse / dt): every
+  // constraint and contact acting on them (stretch, bending, tethers, particle and self-contacts;
+  // every method), plus their own weight, minus their mass times their acceleration. A cloth
+  // hanging at rest from this gripper alone gives its whole weight, pointing down.
   Eigen::Vector3d gripperForce(int gripper) const;
 
   // Obstacles. Index -1 means "no such obstacle".

@@ -48,9 +48,16 @@ class Solver {
 
   const StepStats& stats() const { return stats_; }
   StepStats& mutableStats() { return stats_; }
-  // Sum over the last step of the stretch and tether corrections that acted on particle i divided
-  // by h^2 and times its partner's mass: the constraint force on a kinematic particle (N).
+  // The force every constraint and contact exerted on each kinematic particle over the last step,
+  // i.e. its impulse divided by dt (N; zero for free particles): stretch, bending, tethers,
+  // particle-particle and self-contacts, in every method. A kinematic particle is not moved by
+  // them, so each projection's reaction on it (its gradient times the multiplier, the momentum
+  // the free particles of the constraint received, reversed) is summed instead.
   const Vec3Array& constraintForce() const { return constraint_force_; }
+  // The force each kinematic particle exerted on what moves it (its pin or gripper) over the last
+  // step (N): the constraint force, plus its own weight, minus its mass times its acceleration
+  // (the change of its prescribed velocity over the step, divided by dt).
+  const Vec3Array& supportForce() const { return support_force_; }
 
  private:
   void predict(double h, double s_end, Particles& p);
@@ -66,6 +73,9 @@ class Solver {
   double pbdStiffness(double k) const;
   double dampingFactor(double h) const;
   void countJacobiConstraints(const Particles& p, const ClothTopology& topology);
+  void startReactions(const Particles& p, const ClothTopology& topology);
+  void addMultiplierReactions(const Particles& p, const ClothTopology& topology);
+  void finishReactions(double dt, double h, const Particles& p, const Collisions& collisions);
   double jacobiScale(int i, int j) const;
 
   SolverConfig config_;
@@ -77,7 +87,15 @@ class Solver {
   std::vector<int> jacobi_count_;  // Jacobi: stretch and bend constraints on each free particle
   Vec3Array force_;                // mass_spring: force accumulator
   Vec3Array predicted_;            // x~ = x_prev + h v~ of the current substep (free particles)
+  // Reactions on kinematic particles: the stretch constraints and hinges with a kinematic and a
+  // free particle (listed once per step), the sum of gradient times multiplier over the step
+  // (kg m), the velocities at the step start, and the two forces of the last step.
+  std::vector<int> kinematic_stretch_;
+  std::vector<int> kinematic_bend_;
+  Vec3Array reaction_;
+  Vec3Array start_velocity_;
   Vec3Array constraint_force_;
+  Vec3Array support_force_;
   StepStats stats_;
   // Stretch constraints skipped in the current pass because their particles coincide, and the
   // first of them; the last pass's figures become the step's stats.

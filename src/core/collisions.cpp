@@ -98,6 +98,7 @@ void Collisions::prepare(const Particles& particles, const ClothTopology& topolo
   mesh_point_.assign(obstacle_contacts_.size(), Vec3::Zero());
   box_lo_.assign(n, Vec3::Zero());
   box_hi_.assign(n, Vec3::Zero());
+  kinematic_reaction_.assign(n, Vec3::Zero());
   particle_contacts_.reserve(particles);
   self_collision_pairs_.reserve(particles, topology);
   substep_ = step_ = 0;
@@ -145,7 +146,7 @@ void Collisions::computeSweptBoxes(const Particles& p, double time_left) {
 void Collisions::findCandidates(const Particles& particles, const ClothTopology& topology,
                                 bool step_start) {
   if (particleContactsActive(particles)) {
-    particle_contacts_.findPairs(particles, box_lo_, box_hi_);
+    particle_contacts_.findPairs(particles, box_lo_, box_hi_, !step_start);
   }
   if (selfCollisionActive(topology)) {
     self_collision_pairs_.findPairs(particles, topology, box_lo_, box_hi_, thickness_, step_start);
@@ -173,6 +174,7 @@ void Collisions::beginStep(Particles& particles, const ClothTopology& topology, 
   ++step_;
   stats_.broad_phase_runs = 0;
   checked_substep_ = -1;
+  std::fill(kinematic_reaction_.begin(), kinematic_reaction_.end(), Vec3::Zero());
   for (std::size_t k = 0; k < obstacles_.size(); ++k) {
     frame_begin_[k] = frame_end_[k] = frameFromPose(obstacles_[k].pose);
   }
@@ -238,12 +240,13 @@ double Collisions::project(Particles& particles, const ClothTopology& topology) 
   }
   double max_change = 0.0;
   if (particle_contacts) {
-    max_change =
-        std::max(max_change, particle_contacts_.project(particles, substep_, step_, friction_));
+    max_change = std::max(max_change, particle_contacts_.project(particles, substep_, step_,
+                                                                 friction_, kinematic_reaction_));
   }
   if (self_collision) {
-    max_change = std::max(
-        max_change, self_collision_pairs_.project(particles, thickness_, substep_, friction_));
+    max_change =
+        std::max(max_change, self_collision_pairs_.project(particles, thickness_, substep_,
+                                                           friction_, kinematic_reaction_));
   }
   max_change = std::max(max_change, projectObstacles(particles));
   max_change = std::max(max_change, projectBounds(particles));

@@ -19,6 +19,13 @@ Vec3 separationDirection(const Particles& p, int i, int j, const Vec3& delta, do
   return length > kMinDistance ? Vec3(before / length) : Vec3::UnitZ();
 }
 
+// A pair's multiplier (vector) `lambda` moves i by w_i lambda and j by -w_j lambda; a kinematic end
+// stays, and lambda (i) or -lambda (j) is its reaction.
+void addReaction(const Particles& p, int i, int j, const Vec3& lambda, Vec3Array& reaction) {
+  if (p.inverse_mass[i] == 0.0) reaction[i] += lambda;
+  if (p.inverse_mass[j] == 0.0) reaction[j] -= lambda;
+}
+
 }  // namespace
 
 void ParticleContacts::reserve(const Particles& particles) {
@@ -28,10 +35,37 @@ void ParticleContacts::reserve(const Particles& particles) {
   grown_hi_.reserve(n);
   const int granular = n - particles.cloth_count;
   pairs_.reserve(16 * static_cast<std::size_t>(granular));
+  previous_.reserve(pairs_.capacity());
 }
 
-void ParticleContacts::findPairs(const Particles& p, const Vec3Array& lo, const Vec3Array& hi) {
+void ParticleContacts::findPairs(const Particles& p, const Vec3Array& lo, const Vec3Array& hi,
+                                 bool keep_states) {
+  // The old list is kept aside (a swap: no copy, no allocation) to hand its states on.
+  if (keep_states) pairs_.swap(previous_);
   pairs_.clear();
+  findNewPairs(p, lo, hi);
+  if (keep_states) carryStates();
+}
+
+// A contact found again keeps what it has measured so far in this step: without it, a search
+// within the step (a particle left its swept box) would reopen every friction window at that
+// substep, forgetting the slip still to be caught up and the depth resolved, and a resting pile
+// would creep by as much each time. Both lists are ordered by i (the query loop): the old pairs
+// of each new pair's i are a short range found by bisection.
+void ParticleContacts::carryStates() {
+  const auto by_first = [](const ParticlePair& pair, int i) { return pair.i < i; };
+  for (ParticlePair& pair : pairs_) {
+    auto old = std::lower_bound(previous_.begin(), previous_.end(), pair.i, by_first);
+    for (; old != previous_.end() && old->i == pair.i; ++old) {
+      if (old->j == pair.j) {
+        pair.state = old->state;
+        break;
+      }
+    }
+  }
+}
+
+void ParticleContacts::findNewPairs(const Particles& p, const Vec3Array& lo, const Vec3Array& hi) {
   const int n = p.size();
   if (n == p.cloth_count) return;  // no granular particles
   grown_lo_.resize(n);
@@ -83,7 +117,7 @@ void ParticleContacts::measureAllowances(const Particles& p, const Vec3Array& x,
 }
 
 double ParticleContacts::project(Particles& p, int substep, int step,
-                                 const FrictionConfig& friction) {
+                                 const FrictionConfig& friction, Vec3Array& reaction) {
   double max_change = 0.0;
   for (ParticlePair& pair : pairs_) {
     const int i = pair.i, j = pair.j;
@@ -106,6 +140,7 @@ double ParticleContacts::project(Particles& p, int substep, int step,
       const double push = contactIncrement(c, state);
       p.position[i] += (wi / w * push) * n;
       p.position[j] -= (wj / w * push) * n;
+      addReaction(p, i, j, (push / w) * n, reaction);
       state.normal = n;
       max_change = std::max(max_change, std::abs(push) * std::max(wi, wj) / w);
     }
@@ -114,6 +149,7 @@ double ParticleContacts::project(Particles& p, int substep, int step,
       const Vec3 correction = frictionCorrection(relative, state, friction);
       p.position[i] += (wi / w) * correction;
       p.position[j] -= (wj / w) * correction;
+      addReaction(p, i, j, correction / w, reaction);
     }
   }
   return max_change;

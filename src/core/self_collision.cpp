@@ -96,12 +96,16 @@ double inverseMass(const SelfContactPair& pair, const ContactGeometry& g, const 
 }
 
 // Moves the four points so that sum_k c_k x_k changes by `change` (a vector): x_k += w_k c_k
-// change / w.
+// change / w. With `reaction`, a kinematic point, which stays, gets c_k change / w there (its
+// gradient times the multiplier).
 void distribute(const SelfContactPair& pair, const ContactGeometry& g, double w, const Vec3& change,
-                Particles& p) {
+                Particles& p, Vec3Array* reaction = nullptr) {
   for (int k = 0; k < 4; ++k) {
     const int i = pair.index[k];
     p.position[i] += (p.inverse_mass[i] * g.coefficient[k] / w) * change;
+    if (reaction != nullptr && p.inverse_mass[i] == 0.0) {
+      (*reaction)[i] += (g.coefficient[k] / w) * change;
+    }
   }
 }
 
@@ -136,13 +140,15 @@ void SelfCollision::reserve(const Particles& particles, const ClothTopology& top
   // Typical scenes need 2-4 candidates per triangle and edge; a cloth falling fast into a fold
   // needs more, and capacity then grows once and stays.
   pairs_.reserve(8 * static_cast<std::size_t>(triangles + edges));
+  previous_.reserve(pairs_.capacity());
 }
 
 void SelfCollision::findPairs(const Particles& p, const ClothTopology& topology,
                               const Vec3Array& lo, const Vec3Array& hi, double thickness,
                               bool edge_pairs) {
   // Edge-edge pairs first, vertex-triangle pairs after them: a repeated broad phase within the
-  // step replaces only the latter.
+  // step replaces only the latter, and keeps the old ones aside to hand their states on.
+  if (!edge_pairs) previous_.assign(pairs_.begin() + edge_pair_count_, pairs_.end());
   pairs_.resize(edge_pairs ? 0 : edge_pair_count_);
   if (edge_pairs) edge_pair_count_ = 0;
   if (topology.triangleCount() == 0) return;
@@ -160,6 +166,25 @@ void SelfCollision::findPairs(const Particles& p, const ClothTopology& topology,
     edge_pair_count_ = static_cast<int>(pairs_.size());
   }
   findVertexTrianglePairs(p, topology);
+  if (!edge_pairs) carryVertexTriangleStates();
+}
+
+// A vertex-triangle contact found again within the step keeps its side (frozen while the vertex is
+// over the triangle, where the step-start side a new pair gets may no longer be the one it is
+// held to) and its contact state. Both lists are ordered by vertex (the query loop): the old pairs
+// of each new pair's vertex are a short range found by bisection.
+void SelfCollision::carryVertexTriangleStates() {
+  const auto by_vertex = [](const SelfContactPair& pair, int v) { return pair.index[0] < v; };
+  for (auto pair = pairs_.begin() + edge_pair_count_; pair != pairs_.end(); ++pair) {
+    auto old = std::lower_bound(previous_.begin(), previous_.end(), pair->index[0], by_vertex);
+    for (; old != previous_.end() && old->index[0] == pair->index[0]; ++old) {
+      if (std::equal(old->index + 1, old->index + 4, pair->index + 1)) {
+        pair->side = old->side;
+        pair->state = old->state;
+        break;
+      }
+    }
+  }
 }
 
 // Triangles are hashed (each in the cells its box covers) and every vertex queries its small
@@ -266,7 +291,7 @@ void SelfCollision::measureAllowances(const Vec3Array& x, double thickness, doub
 }
 
 double SelfCollision::project(Particles& p, double thickness, int substep,
-                              const FrictionConfig& friction) {
+                              const FrictionConfig& friction, Vec3Array& reaction) {
   double max_change = 0.0;
   for (SelfContactPair& pair : pairs_) {
     ContactState& state = pair.state;
@@ -303,7 +328,7 @@ double SelfCollision::project(Particles& p, double thickness, int substep,
       // that grew without bound in the drape scene).
       const double push = contactIncrement(std::max(c, -kMaxPush * thickness), state);
       state.normal = pair.side * g.normal;
-      distribute(pair, g, w, push * state.normal, p);
+      distribute(pair, g, w, push * state.normal, p, &reaction);
       max_change = std::max(max_change, std::abs(push));
     }
     if (state.frictionDepth() > 0.0) {
@@ -312,7 +337,7 @@ double SelfCollision::project(Particles& p, double thickness, int substep,
         const int i = pair.index[k];
         relative += g.coefficient[k] * (p.position[i] - p.substep_start[i]);
       }
-      distribute(pair, g, w, frictionCorrection(relative, state, friction), p);
+      distribute(pair, g, w, frictionCorrection(relative, state, friction), p, &reaction);
     }
   }
   return max_change;

@@ -291,7 +291,7 @@ void Simulation::kinematicSetChanged() {
 
 Eigen::Vector3d Simulation::gripperForce(int gripper) const {
   Eigen::Vector3d force = Eigen::Vector3d::Zero();
-  for (int i : grippers_[gripper].grasped) force += solver_.constraintForce()[i];
+  for (int i : grippers_[gripper].grasped) force += solver_.supportForce()[i];
   return force;
 }
 

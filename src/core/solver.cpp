@@ -70,7 +70,14 @@ void Solver::prepare(const Particles& particles, const ClothTopology& topology) 
   jacobi_count_.assign(n, 0);
   force_.assign(n, Vec3::Zero());
   predicted_.assign(n, Vec3::Zero());
+  kinematic_stretch_.clear();
+  kinematic_stretch_.reserve(topology.stretch.size());
+  kinematic_bend_.clear();
+  kinematic_bend_.reserve(topology.bend.size());
+  reaction_.assign(n, Vec3::Zero());
+  start_velocity_.assign(n, Vec3::Zero());
   constraint_force_.assign(n, Vec3::Zero());
+  support_force_.assign(n, Vec3::Zero());
 }
 
 void Solver::initializeVelocities(Particles& particles, double dt) const {
@@ -278,6 +285,30 @@ double projectIntoLens(Vec3& x, const Vec3& a, double ra, const Vec3& b, double 
   return (x - start).norm();
 }
 
+// The reactions on the two anchors of a lens projection from `start` to `x`: at the nearest point
+// of the lens the move is -(mu_a n_a + mu_b n_b), n the unit vectors from each anchor to x and
+// mu >= 0 the two tethers' multipliers (the KKT condition), so solving that 2 x 2 system splits the
+// momentum m (start - x) between the anchors. When n_a and n_b are (nearly) parallel the split is
+// not determined by the geometry (anchors pulled apart beyond the rest distance): halves.
+void addLensReactions(const Vec3& start, const Vec3& x, double mass, int anchor_a, int anchor_b,
+                      const Particles& p, Vec3Array& reaction) {
+  const Vec3 move = x - start;
+  const Vec3 to_a = x - p.position[anchor_a], to_b = x - p.position[anchor_b];
+  const double la = to_a.norm(), lb = to_b.norm();
+  if (la > kMinLength && lb > kMinLength) {
+    const Vec3 na = to_a / la, nb = to_b / lb;
+    const double c = na.dot(nb), det = 1.0 - c * c;
+    if (det > 1e-6) {
+      const double ra = -move.dot(na), rb = -move.dot(nb);
+      reaction[anchor_a] += (mass * (ra - c * rb) / det) * na;
+      reaction[anchor_b] += (mass * (rb - c * ra) / det) * nb;
+      return;
+    }
+  }
+  reaction[anchor_a] -= 0.5 * mass * move;
+  reaction[anchor_b] -= 0.5 * mass * move;
+}
+
 }  // namespace
 
 // Long-range attachments (Kim et al. 2012): unilateral, only the free particle moves, so a
@@ -324,13 +355,17 @@ double Solver::projectTethers(Particles& p, const ClothTopology& topology) {
       const double moved = projectIntoBall(projected, p.position[ta.anchor], ta.max_length);
       const int b = worst(begin, end, projected, static_cast<std::size_t>(a));
       if (b < 0) {
+        // Only the particle moves: the anchor's reaction is the momentum it was given, reversed.
+        reaction_[ta.anchor] -= p.mass[particle] * (projected - x);
         x = projected;
         max_change = std::max(max_change, moved);
         break;
       }
       const Tether& tb = tethers[b];
+      const Vec3 start = x;
       max_change = std::max(max_change, projectIntoLens(x, p.position[ta.anchor], ta.max_length,
                                                         p.position[tb.anchor], tb.max_length));
+      addLensReactions(start, x, p.mass[particle], ta.anchor, tb.anchor, p, reaction_);
     }
   }
   return max_change;
@@ -433,6 +468,12 @@ void Solver::massSpringSubstep(double h, double s_end, Particles& p, const Cloth
       for (int v = 0; v < 4; ++v) force_[con.index[v]] += con.weight[v] * f;
     }
   }
+  // A kinematic particle's springs act on it like on any other; only it does not move. Their
+  // force, times h^2, is its reaction (kg m) in the units of the projected constraints.
+  for (int i = 0; i < p.size(); ++i) {
+    if (p.inverse_mass[i] != 0.0) continue;
+    reaction_[i] += (h * h) * (force_[i] - p.mass[i] * config_.gravity);
+  }
   const double keep = dampingFactor(h);
   for (int i = 0; i < p.size(); ++i) {
     p.substep_start[i] = p.position[i];
@@ -450,6 +491,76 @@ void Solver::massSpringSubstep(double h, double s_end, Particles& p, const Cloth
   }
 }
 
+// The kinematic set is fixed during a step: the stretch constraints and hinges that join a
+// kinematic to a free particle are listed once, so the reactions cost nothing for the others.
+void Solver::startReactions(const Particles& p, const ClothTopology& topology) {
+  std::fill(reaction_.begin(), reaction_.end(), Vec3::Zero());
+  kinematic_stretch_.clear();
+  kinematic_bend_.clear();
+  for (int i = 0; i < p.size(); ++i) {
+    if (p.inverse_mass[i] == 0.0) start_velocity_[i] = p.velocity[i];
+  }
+  if (config_.method == Method::kMassSpring) return;  // its springs report through force_
+  const int stretch_count = static_cast<int>(topology.stretch.size());
+  for (int c = 0; c < stretch_count; ++c) {
+    const DistanceConstraint& con = topology.stretch[c];
+    if ((p.inverse_mass[con.i] == 0.0) != (p.inverse_mass[con.j] == 0.0)) {
+      kinematic_stretch_.push_back(c);
+    }
+  }
+  if (bend_compliance_ < 0.0) return;
+  const int bend_count = static_cast<int>(topology.bend.size());
+  for (int c = 0; c < bend_count; ++c) {
+    int kinematic = 0;
+    for (int v = 0; v < 4; ++v) kinematic += p.inverse_mass[topology.bend[c].index[v]] == 0.0;
+    if (kinematic > 0 && kinematic < 4) kinematic_bend_.push_back(c);
+  }
+}
+
+// After a substep's passes: each listed constraint's multiplier, summed over the passes, times
+// its gradient at the kinematic particle (stretch: +-n; hinge: scale K_k) is the reaction there.
+// Read after the passes instead of inside the projection loops, which stay as they are.
+void Solver::addMultiplierReactions(const Particles& p, const ClothTopology& topology) {
+  for (int c : kinematic_stretch_) {
+    const DistanceConstraint& con = topology.stretch[c];
+    const Vec3 delta = p.position[con.i] - p.position[con.j];
+    const double length = delta.norm();
+    if (length < kMinLength) continue;
+    const Vec3 reaction = (stretch_lambda_[c] / length) * delta;  // lambda grad_i C
+    if (p.inverse_mass[con.i] == 0.0) {
+      reaction_[con.i] += reaction;
+    } else {
+      reaction_[con.j] -= reaction;
+    }
+  }
+  for (int c : kinematic_bend_) {
+    const BendConstraint& con = topology.bend[c];
+    for (int v = 0; v < 4; ++v) {
+      const int i = con.index[v];
+      if (p.inverse_mass[i] == 0.0) reaction_[i] += (con.scale * con.weight[v]) * bend_lambda_[c];
+    }
+  }
+}
+
+// Impulse over the step = sum of reactions / h (each is a force times h^2, applied once per
+// substep); the force is that impulse / dt. The kinematic particle itself adds its weight and
+// loses the momentum its prescribed motion gained.
+void Solver::finishReactions(double dt, double h, const Particles& p,
+                             const Collisions& collisions) {
+  const double scale = 1.0 / (h * dt);
+  const Vec3Array& contacts = collisions.kinematicReaction();
+  for (int i = 0; i < p.size(); ++i) {
+    if (p.inverse_mass[i] != 0.0) {
+      constraint_force_[i].setZero();
+      support_force_[i].setZero();
+      continue;
+    }
+    constraint_force_[i] = scale * (reaction_[i] + contacts[i]);
+    support_force_[i] = constraint_force_[i] +
+                        p.mass[i] * (config_.gravity - (p.velocity[i] - start_velocity_[i]) / dt);
+  }
+}
+
 void Solver::step(double dt, Particles& p, const ClothTopology& topology, Collisions& collisions) {
   const auto t_start = Clock::now();
   const int substeps = config_.substeps;
@@ -461,6 +572,7 @@ void Solver::step(double dt, Particles& p, const ClothTopology& topology, Collis
   startDegenerateCount();
   p.step_start = p.position;
   if (config_.ordering == Ordering::kJacobi) countJacobiConstraints(p, topology);
+  startReactions(p, topology);
 
   // Find contacts at the step start; every substep enforces them (Jolt's "collide" phase).
   // Collisions::project searches again in a substep whose prediction left the swept boxes.
@@ -495,30 +607,14 @@ void Solver::step(double dt, Particles& p, const ClothTopology& topology, Collis
       // Adaptive count (seed: "measuring the change from last iteration").
       if (config_.tolerance > 0.0 && max_change < config_.tolerance) break;
     }
+    addMultiplierReactions(p, topology);
     const auto t2 = Clock::now();
     stats_.project_time += seconds(t1, t2);
     updateVelocities(h, p);
     stats_.update_time += seconds(t2, Clock::now());
   }
 
-  // The force each stretch constraint of the last substep exerts on a kinematic end point:
-  // f = grad C^T lambda / h^2 (XPBD sec. 4); for pbd/verlet lambda is the summed correction.
-  for (auto& f : constraint_force_) f.setZero();
-  if (config_.method != Method::kMassSpring) {
-    const double inv_h2 = 1.0 / (h * h);
-    for (std::size_t c = 0; c < topology.stretch.size(); ++c) {
-      const DistanceConstraint& con = topology.stretch[c];
-      const bool ki = p.inverse_mass[con.i] == 0.0, kj = p.inverse_mass[con.j] == 0.0;
-      if (ki == kj) continue;
-      const Vec3 delta = p.position[con.i] - p.position[con.j];
-      const double length = delta.norm();
-      if (length < kMinLength) continue;
-      const Vec3 grad_i = delta / length;  // grad_j = -grad_i
-      const Vec3 f_i = stretch_lambda_[c] * inv_h2 * grad_i;
-      if (ki) constraint_force_[con.i] += f_i;
-      if (kj) constraint_force_[con.j] -= f_i;
-    }
-  }
+  finishReactions(dt, h, p, collisions);
   collisions.endStep();
   stats_.sim_time += dt;
   stats_.degenerate_constraints = degenerate_in_pass_;

@@ -104,15 +104,18 @@ TEST(Gripper, GraspedParticlesFollowWithinAMillimetreAndFallWhenReleased) {
     EXPECT_LT(distance(state.positions[held[k]], expected), 1e-3) << "particle " << held[k];
   }
 
-  // The hanging cloth pulls the gripper down.
+  // The cloth pulls the gripper down. Its size here is not the weight of a part of the cloth: the
+  // held corner clamps the bending cloth, whose hinges push back much harder than it weighs (the
+  // pins take the opposite). gripper_wrench.test checks the size against a cloth that hangs from
+  // a gripper alone.
   geometry_msgs::WrenchStamped wrench;
   ASSERT_TRUE(wrenches.waitForNext(wrench, 5.0));
   EXPECT_EQ(wrench.header.frame_id, "world");
-  EXPECT_TRUE(std::isfinite(wrench.wrench.force.x) && std::isfinite(wrench.wrench.force.y) &&
-              std::isfinite(wrench.wrench.force.z));
-  EXPECT_GT(std::abs(wrench.wrench.force.x) + std::abs(wrench.wrench.force.y) +
-                std::abs(wrench.wrench.force.z),
-            1e-3);
+  const geometry_msgs::Vector3& force = wrench.wrench.force;
+  ASSERT_TRUE(std::isfinite(force.x) && std::isfinite(force.y) && std::isfinite(force.z));
+  double mass = 0.0;
+  ASSERT_TRUE(ros::NodeHandle(node()).getParam("cloth/mass", mass));
+  EXPECT_LT(force.z, -0.01 * mass * 9.81) << "the cloth does not pull the gripper down";
 
   ASSERT_TRUE(pbd_cloth_test::callGrasp(node() + "/left/grasp", false, &response))
       << response.message;
