@@ -159,8 +159,9 @@ double rayShape(const Shape& shape, const Vec3& o, const Vec3& d) {
   return kNoHit;
 }
 
-// Local bounding box of an analytic or mesh shape (unpadded).
+// Local bounding box of an analytic or mesh shape (unpadded); a plane has none (infinite).
 void localBounds(const Shape& shape, Vec3& lo, Vec3& hi) {
+  hi = Vec3::Constant(kNoHit);
   switch (shape.type) {
     case ShapeType::kSphere:
       hi = Vec3::Constant(shape.radius);
@@ -179,7 +180,6 @@ void localBounds(const Shape& shape, Vec3& lo, Vec3& hi) {
       hi = shape.mesh->boundsMax();
       return;
     case ShapeType::kPlane:
-      hi = Vec3::Constant(kNoHit);
       break;
   }
   lo = -hi;
@@ -339,7 +339,7 @@ void DepthRenderer::drawShape(const Shape& shape, const Frame& shape_in_camera,
   }
   PixelRect rect = wholeImage(camera);
   if (shape.type != ShapeType::kPlane) {
-    Vec3 lo, hi, corners[8];
+    Vec3 lo = Vec3::Zero(), hi = Vec3::Zero(), corners[8];
     localBounds(shape, lo, hi);
     boxCorners(lo, hi, shape_in_camera, corners);
     rect = projectedRect(corners, 8, camera);
