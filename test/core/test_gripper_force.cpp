@@ -17,19 +17,7 @@ namespace {
 
 using test::kGravity;
 
-const char* name(Method method) {
-  switch (method) {
-    case Method::kVerlet:
-      return "verlet";
-    case Method::kPbd:
-      return "pbd";
-    case Method::kXpbd:
-      return "xpbd";
-    case Method::kMassSpring:
-      return "mass_spring";
-  }
-  return "?";
-}
+const char* name(Method method) { return toString(method); }
 
 // A 10 x 10 cloth of 0.1 kg, 5 cm spacing, hanging in the x-z plane (top row at z = 1) with
 // nothing pinned: one gripper, radius 3 cm, grasps the two middle particles of the top row at

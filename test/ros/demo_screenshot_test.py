@@ -17,7 +17,7 @@ import rostest
 # before the package's own Python messages exist, so `import pbd_cloth.msg` would fail there.
 from visualization_msgs.msg import MarkerArray
 
-from screenshot_helpers import ScreenshotCase, count_pixels, is_cloth
+from screenshot_helpers import ScreenshotCase, is_cloth
 
 
 class DemoScreenshotTest(ScreenshotCase):
@@ -52,16 +52,7 @@ class DemoScreenshotTest(ScreenshotCase):
             if grasped_since is not None and time.time() > grasped_since + 1.8:
                 break
             time.sleep(0.05)
-        best_count, best_ppm = -1, None
-        deadline = time.time() + 10.0
-        while time.time() < deadline:
-            ppm = self.grab(display)
-            count, = count_pixels(ppm, is_cloth)
-            if count > best_count:
-                best_count, best_ppm = count, ppm
-            if count >= min_pixels:
-                break
-            time.sleep(1.0)
+        (best_count,), best_ppm = self.best_grab(display, (is_cloth,), (min_pixels,), 10.0)
 
         where = self.keep(best_ppm, 'demo_screenshot.png', rospy.get_param('~output', ''))
         print('demo_screenshot: %d cloth pixels, picture in %s' % (best_count, where))

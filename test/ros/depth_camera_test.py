@@ -9,7 +9,6 @@
 #   /tf_static, and the noisy camera differs from the clean one by the configured deviation.
 #
 # /usr/bin/python3 on purpose: a pyenv python3 earlier on PATH has no rospy.
-import math
 import sys
 import threading
 import time

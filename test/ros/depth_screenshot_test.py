@@ -15,7 +15,7 @@ import rospy
 import rostest
 from sensor_msgs.msg import PointCloud2
 
-from screenshot_helpers import ScreenshotCase, count_pixels, is_cloth
+from screenshot_helpers import ScreenshotCase, is_cloth
 
 CLOUD_TOPIC = '/cloth_node/head_camera/depth/points'
 
@@ -48,17 +48,9 @@ class DepthScreenshotTest(ScreenshotCase):
 
         min_cloud = rospy.get_param('~min_cloud_pixels', 5000)
         min_cloth = rospy.get_param('~min_cloth_pixels', 500)
-        best_score, best = -1.0, None
-        deadline = time.time() + 6.0
-        while time.time() < deadline:
-            ppm = self.grab(display)
-            cloud, cloth = count_pixels(ppm, is_cloud, is_cloth)
-            score = min(cloud / min_cloud, cloth / min_cloth)
-            if score > best_score:
-                best_score, best = score, (cloud, cloth, ppm)
-            time.sleep(1.0)
+        (cloud, cloth), ppm = self.best_grab(display, (is_cloud, is_cloth), (min_cloud, min_cloth),
+                                             6.0)
 
-        cloud, cloth, ppm = best
         where = self.keep(ppm, 'depth_screenshot.png', rospy.get_param('~output', ''))
         print('depth_screenshot: %d cloud pixels, %d cloth pixels, picture in %s'
               % (cloud, cloth, where))

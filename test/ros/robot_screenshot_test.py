@@ -15,7 +15,7 @@ import rospy
 import rostest
 import tf2_ros
 
-from screenshot_helpers import ScreenshotCase, count_pixels, is_cloth
+from screenshot_helpers import ScreenshotCase, is_cloth
 
 
 # The arm's material `teal` of urdf/demo_arm.urdf, (0.10, 0.62, 0.72), lit: little red, blue
@@ -59,17 +59,10 @@ class RobotScreenshotTest(ScreenshotCase):
 
         min_robot = rospy.get_param('~min_robot_pixels', 1500)
         min_cloth = rospy.get_param('~min_cloth_pixels', 2000)
-        best_score, best = -1.0, None
-        deadline = time.time() + 3.0  # the wrist stays that deep for about 3 s
-        while time.time() < deadline:
-            ppm = self.grab(display)
-            robot, cloth = count_pixels(ppm, is_robot, is_cloth)
-            score = min(robot / min_robot, cloth / min_cloth)
-            if score > best_score:
-                best_score, best = score, (robot, cloth, ppm)
-            time.sleep(0.5)
+        # The wrist stays that deep for about 3 s.
+        (robot, cloth), ppm = self.best_grab(display, (is_robot, is_cloth), (min_robot, min_cloth),
+                                             3.0, interval=0.5)
 
-        robot, cloth, ppm = best
         where = self.keep(ppm, 'robot_screenshot.png', rospy.get_param('~output', ''))
         print('robot_screenshot: %d arm pixels, %d cloth pixels, picture in %s'
               % (robot, cloth, where))

@@ -116,6 +116,24 @@ class ScreenshotCase(unittest.TestCase):
         return subprocess.run(['/usr/bin/convert', 'xwd:-', 'ppm:-'], input=xwd,
                               stdout=subprocess.PIPE, check=True, timeout=20.0).stdout
 
+    def best_grab(self, display, predicates, minimums, seconds, interval=1.0, accept=None):
+        """Grabs the screen every `interval` s for up to `seconds` and returns (counts, ppm) of the
+        best picture: counts of the pixels each predicate accepts, the best being the one whose
+        smallest count / minimum ratio is largest. Stops early at a picture whose counts all reach
+        their minimums (and that `accept(counts)` accepts, when given)."""
+        best_score, best = -1.0, None
+        deadline = time.time() + seconds
+        while True:
+            ppm = self.grab(display)
+            counts = count_pixels(ppm, *predicates)
+            score = min(c / float(m) for c, m in zip(counts, minimums))
+            good = score >= 1.0 and (accept is None or accept(counts))
+            if good or score > best_score:
+                best_score, best = (float('inf') if good else score), (counts, ppm)
+            if good or time.time() + interval > deadline:
+                return best
+            time.sleep(interval)
+
     def save_png(self, ppm, path):
         directory = os.path.dirname(os.path.abspath(path))
         os.makedirs(directory, exist_ok=True)

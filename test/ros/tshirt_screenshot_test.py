@@ -18,7 +18,7 @@ import rostest
 # Only system message types here (see demo_screenshot_test.py).
 from visualization_msgs.msg import MarkerArray
 
-from screenshot_helpers import ScreenshotCase, count_pixels, is_cloth
+from screenshot_helpers import ScreenshotCase, is_cloth
 
 # Settled: the fastest of the mesh's vertices, measured between two marker messages at least
 # kSettleWindow s of simulated time apart, moves slower than this (m/s). Hanging, the shirt swings
@@ -101,16 +101,8 @@ class TshirtScreenshotTest(ScreenshotCase):
         # screen one colour).
         min_pixels = rospy.get_param('~min_cloth_pixels', 20000)
         max_pixels = rospy.get_param('~max_cloth_pixels', 300000)
-        best_count, best_ppm = -1, None
-        deadline = time.time() + 10.0
-        while time.time() < deadline:
-            ppm = self.grab(display)
-            count, = count_pixels(ppm, is_cloth)
-            if count > best_count:
-                best_count, best_ppm = count, ppm
-            if min_pixels <= count <= max_pixels:
-                break
-            time.sleep(1.0)
+        (best_count,), best_ppm = self.best_grab(
+            display, (is_cloth,), (min_pixels,), 10.0, accept=lambda c: c[0] <= max_pixels)
 
         where = self.keep(best_ppm, 'tshirt_screenshot.png', rospy.get_param('~output', ''))
         print('tshirt_screenshot: settled %.2f s of sim time after the first mesh, %d cloth '
