@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """The sweeps behind doc/*.csv: cloth_bench over method x substeps x iterations x ordering on the
-three bench scenes, bullet_cloth_bench over its substep and iteration knobs on the same scenes, and
+four bench scenes, bullet_cloth_bench over its substep and iteration knobs on the same scenes, and
 the stability matrix. Called by scripts/run_bench; one CSV row per run with every key=value field
 the tool printed, plus the overrides that made the run.
 
@@ -23,7 +23,7 @@ REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 # up (finite, but spread over kilometres) one count takes seconds: such a run is stopped and
 # recorded as diverged (exit_status=timeout) instead of holding the sweep for minutes.
 def run_timeout(run):
-    if run.scene in ('hanging.yaml', 'drape.yaml'):
+    if run.scene in CLOTH_SCENES:
         steps = run.duration * 60.0
         return max(20.0, 4.0 * (1.0 + steps * run.fields.get('passes', 1) * 0.6e-3))
     return 120.0
@@ -52,6 +52,7 @@ def splits(totals):
 # at every step of a crumpled 50 x 50 cloth (the cheapest settings) takes up to 20 s a run; every
 # 3rd step (50 ms) changes max_strain by under 2 % and keeps the whole sweep under 15 minutes.
 CLOTH_SAMPLE_EVERY = 3
+CLOTH_SCENES = ('hanging.yaml', 'drape.yaml', 'swinging.yaml')
 
 
 class Run(object):
@@ -66,7 +67,7 @@ class Run(object):
         self.sets = list(sets)
         self.fields = dict(fields)
         self.positions = positions
-        self.sample_every = CLOTH_SAMPLE_EVERY if scene in ('hanging.yaml', 'drape.yaml') else 0
+        self.sample_every = CLOTH_SAMPLE_EVERY if scene in CLOTH_SCENES else 0
 
     def command(self, bin_dir, positions_file=None):
         cmd = [os.path.join(bin_dir, self.tool), '--config', os.path.join('config', self.scene),
@@ -163,6 +164,45 @@ def hanging_runs(quick):
                                 ['solver.spring_stiffness=%g' % k,
                                  'solver.bend_spring_stiffness=0.01'],
                                 spring_stiffness=k))
+    return runs
+
+
+# Curves of the swinging sweep beyond plain xpbd: (--set assignments, CSV fields). Solver options
+# of issue 12 join here, so every method tried lands on the same Pareto chart.
+SWINGING_VARIANTS = {}
+
+
+def swinging_runs(quick):
+    """config/swinging.yaml, 3 s (issue 12's benchmark): a flat cloth with both diagonals per cell
+    swinging down from two pinned corners; the error is the final strain of the structural links.
+
+    xpbd runs substeps with one pass each from 5 up to 320 and a few iteration-heavy points; Bullet
+    runs its internal steps with one position pass and, as the figures of issue 12, 10 passes.
+    """
+    duration = 1.0 if quick else 3.0
+    scene = 'swinging.yaml'
+    sweep = 'swinging'
+    if quick:
+        plan = {'xpbd': substeps_only([5, 20]), 'bullet': substeps_only([5, 20]) + [(4, 10)]}
+    else:
+        plan = {
+            'xpbd': substeps_only([5, 10, 20, 40, 80, 160, 320]) + [(10, 2), (20, 2), (10, 4),
+                                                                    (40, 2), (20, 4)],
+            'bullet': substeps_only([4, 8, 16, 32, 64, 128, 256]) + [(4, 10), (8, 10), (16, 10),
+                                                                     (16, 4), (32, 4)],
+        }
+        for curve, (sets, fields, pairs) in SWINGING_VARIANTS.items():
+            plan[curve] = pairs
+    runs = []
+    for curve, pairs in plan.items():
+        sets, fields, _ = SWINGING_VARIANTS.get(curve, ([], {}, None))
+        for s, i in pairs:
+            if curve.startswith('bullet'):
+                run = bullet_run(sweep, scene, curve, s, i, duration, sets)
+            else:
+                run = pbd_run(sweep, scene, curve, 'xpbd', s, i, duration, sets)
+            run.fields.update(fields)
+            runs.append(run)
     return runs
 
 
@@ -370,14 +410,16 @@ def main():
     parser.add_argument('--out', default=os.path.join(REPO, 'doc'), help='CSV directory')
     parser.add_argument('--quick', action='store_true', help='small grids (a pipeline check)')
     parser.add_argument('--only', nargs='*', default=None,
-                        help='sweeps to run: hanging drape chain stability (default: all)')
+                        help='sweeps to run: hanging swinging drape chain stability '
+                        '(default: all)')
     args = parser.parse_args()
     bin_dir = os.path.abspath(args.bin_dir)
     for tool in ('cloth_bench', 'bullet_cloth_bench'):
         if not os.access(os.path.join(bin_dir, tool), os.X_OK):
             sys.exit('bench_sweep: %s not found in %s' % (tool, bin_dir))
     os.makedirs(args.out, exist_ok=True)
-    plan = [('hanging', hanging_runs, 1), ('drape', drape_runs, 1), ('chain', chain_runs, 1),
+    plan = [('hanging', hanging_runs, 1), ('swinging', swinging_runs, 1), ('drape', drape_runs, 1),
+            ('chain', chain_runs, 1),
             # Only stability and error are read from this one, not time: both cores.
             ('stability', stability_runs, 2)]
     for name, make, workers in plan:

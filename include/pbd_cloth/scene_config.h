@@ -102,6 +102,9 @@ struct ClothConfig {
   std::vector<std::pair<int, double>> point_masses;  // cloth.point_masses [[index, kg]]
   bool tethers = false;                              // cloth.tethers
   bool shear = true;                                 // cloth.shear: diagonal stretch constraints
+  // cloth.shear_diagonals: 1 = each grid cell's triangle diagonal (the mesh edge, as Jolt), 2 =
+  // both diagonals of every cell (Bullet's and Bender's cloth, the issue 12 benchmark). Grid only.
+  int shear_diagonals = 1;
 };
 
 struct GranularConfig {

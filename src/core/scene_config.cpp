@@ -220,6 +220,7 @@ void validateCloth(const ClothConfig& c) {
                                           " = " + std::to_string(count));
     }
     checkNumber("cloth.spacing", c.spacing, kPositive);
+    checkInteger("cloth.shear_diagonals", c.shear_diagonals, 1, 2);
   }
   checkNumber("cloth.mass", c.mass, kPositive);
   checkFinite("cloth.origin", c.origin);

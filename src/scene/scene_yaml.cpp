@@ -244,7 +244,8 @@ void readCloth(const YAML::Node& node, ClothConfig& c) {
   const MapReader map(node, "cloth",
                       {"mesh", "mesh_scale", "rows", "cols", "spacing", "mass", "origin", "rpy",
                        "stretch_compliance", "bend_compliance", "thickness", "self_collision",
-                       "friction", "pinned", "point_masses", "tethers", "shear"});
+                       "friction", "pinned", "point_masses", "tethers", "shear",
+                       "shear_diagonals"});
   map.read("mesh", c.mesh);
   map.read("mesh_scale", c.mesh_scale);
   map.read("rows", c.rows);
@@ -259,6 +260,7 @@ void readCloth(const YAML::Node& node, ClothConfig& c) {
   map.read("self_collision", c.self_collision);
   map.read("tethers", c.tethers);
   map.read("shear", c.shear);
+  map.read("shear_diagonals", c.shear_diagonals);
 
   const MapReader friction(map.get("friction"), map.keyOf("friction"), {"static", "kinetic"});
   friction.read("static", c.friction.static_coefficient);
