@@ -33,6 +33,8 @@ STYLES = [
     ('xpbd, no bending', dict(color='tab:cyan', marker='o')),
     ('xpbd + tethers', dict(color='navy', marker='*')),
     ('xpbd jacobi', dict(color='tab:purple', marker='v')),
+    ('xpbd + levels', dict(color='darkgreen', marker='h')),
+    ('xpbd + levels, interpolated', dict(color='tab:pink', marker='X')),
     ('pbd', dict(color='tab:green', marker='s')),
     ('verlet', dict(color='tab:olive', marker='D')),
     ('mass_spring', dict(color='tab:brown', marker='P')),
@@ -115,8 +117,10 @@ def pareto_panel(ax, rows, metric, ylabel, target=None):
                 if converged_run(r) and r[metric] > 0]
         bad = [r for r in mine if not converged_run(r)]
         everything += good
-        label = '%s (%d runs%s)' % (name, len(mine),
-                                    ', %d diverged' % len(bad) if bad else '')
+        frozen = sum(1 for r in bad if r.get('frozen'))
+        label = '%s (%d runs%s%s)' % (name, len(mine),
+                                      ', %d diverged' % (len(bad) - frozen) if len(bad) > frozen
+                                      else '', ', %d frozen' % frozen if frozen else '')
         if good:
             ax.scatter([p[0] for p in good], [p[1] for p in good], s=12, alpha=0.3,
                        color=style['color'], marker=style['marker'], linewidths=0)
@@ -148,7 +152,7 @@ def pareto_panel(ax, rows, metric, ylabel, target=None):
     ax.set_xlabel('wall time per step (ms, one thread)')
     ax.set_ylabel(ylabel)
     ax.grid(True, which='major', alpha=0.3)
-    ax.text(0.99, 0.99, 'x at the top: diverged runs (at their time per step)',
+    ax.text(0.99, 0.99, 'x at the top: diverged (or frozen) runs, at their time per step',
             transform=ax.transAxes, ha='right',
             va='top', fontsize=7, color='gray')
 
@@ -371,6 +375,26 @@ def read_microbench(path):
     return list(csv.DictReader(lines[start:]))
 
 
+def swinging_verdicts(rows):
+    """Drops the t = 0 row and marks runs whose cloth never fell (energy within 1 % of the start's:
+    Bullet in single precision with tiny internal steps) as failed, like diverged ones."""
+    start = [r for r in rows if r.get('level') == 'start']
+    runs = [r for r in rows if r.get('level') != 'start']
+    if start and math.isfinite(start[0]['energy']):
+        e0 = start[0]['energy']
+        for r in runs:
+            if r['ok'] and math.isfinite(r['energy']) and abs(r['energy'] - e0) < 0.01 * abs(e0):
+                r['ok'] = False
+                r['frozen'] = True
+    return runs
+
+
+def verdict(row):
+    if row.get('frozen'):
+        return 'frozen'
+    return 'ok' if converged_run(row) else 'diverged'
+
+
 def swinging_summary(add, swinging):
     """Issue 12's benchmark: which settings reach 1 % max / 0.1 % mean structural strain."""
     add('')
@@ -407,7 +431,7 @@ def swinging_summary(add, swinging):
     add('Every run (the command of each is in doc/sweep_swinging.csv):')
     add('')
     add('| curve | N x M | wall ms/step | project ms | final max strain | final mean strain | '
-        'max strain over the run, all links | finite | --set |')
+        'max strain over the run, all links | verdict | --set |')
     add('|---|---|---|---|---|---|---|---|---|')
     for curve in curves_of(swinging):
         for r in sorted([r for r in swinging if r['curve'] == curve],
@@ -415,8 +439,11 @@ def swinging_summary(add, swinging):
             add('| %s | %dx%d | %.3g | %s | %.3g | %.3g | %.3g | %s | `%s` |' % (
                 curve, r['substeps'], r['iterations'], r['wall_ms_per_step'],
                 '%.3g' % r['project_ms'] if math.isfinite(r['project_ms']) else '-',
-                r[mx], r[mn], r['max_strain'], r.get('finite') or r.get('exit_status'),
-                r.get('sets', '')))
+                r[mx], r[mn], r['max_strain'], verdict(r), r.get('sets', '')))
+    add('')
+    add('verdict: ok; diverged (non-finite, or links over %g x rest length at some sample); frozen '
+        '(the cloth never fell: energy within 1 %% of the start, Bullet\'s single precision).'
+        % DIVERGED_STRAIN)
 
 
 def summary(data_dir, hanging, drape, chain, stability, env_text, swinging=()):
@@ -639,7 +666,7 @@ def main():
     data = args.data
     hanging = load(os.path.join(data, 'sweep_hanging.csv'))
     drape = load(os.path.join(data, 'sweep_drape.csv'))
-    swinging = load(os.path.join(data, 'sweep_swinging.csv'))
+    swinging = swinging_verdicts(load(os.path.join(data, 'sweep_swinging.csv')))
     chain = load(os.path.join(data, 'sweep_chain.csv'))
     stability = load(os.path.join(data, 'sweep_stability.csv'))
     if not (hanging or swinging or drape or chain or stability):

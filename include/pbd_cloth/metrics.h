@@ -6,8 +6,8 @@
 namespace pbd_cloth {
 
 struct Metrics {
-  double max_strain = 0.0;       // max |l - l0| / l0 over stretch constraints
-  double mean_strain = 0.0;      // mean |l - l0| / l0 over stretch constraints
+  double max_strain = 0.0;   // max |l - l0| / l0 over stretch constraints
+  double mean_strain = 0.0;  // mean |l - l0| / l0 over stretch constraints
   // The same over the structural links only (grid rows and columns, or every edge of a mesh
   // cloth): the strain of the issue 12 benchmark, which leaves the shear diagonals out.
   double structural_max_strain = 0.0;

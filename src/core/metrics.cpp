@@ -35,8 +35,8 @@ void computeStrain(const Particles& particles, const ClothTopology& topology, do
 
 void computeStructuralStrain(const Particles& particles, const ClothTopology& topology,
                              double& max_strain, double& mean_strain) {
-  const std::size_t count = std::min(topology.stretch.size(),
-                                     static_cast<std::size_t>(std::max(0, topology.structural_count)));
+  const std::size_t count = std::min(
+      topology.stretch.size(), static_cast<std::size_t>(std::max(0, topology.structural_count)));
   strainOfFirst(particles, topology, count, max_strain, mean_strain);
 }
 

@@ -406,6 +406,8 @@ INSTANTIATE_TEST_SUITE_P(
         BadValue{"cloth.point_masses=[[3, 0]]", "cloth.point_masses[0]", "> 0"},
         BadValue{"cloth.point_masses=[[3]]", "cloth.point_masses[0]", "[index, kg]"},
         BadValue{"cloth.shear_diagonals=3", "cloth.shear_diagonals", "[1, 2]"},
+        BadValue{"solver.levels=17", "solver.levels", "[0, 16]"},
+        BadValue{"solver.levels=-1", "solver.levels", "[0, 16]"},
         BadValue{"cloth.shear_diagonals=0", "cloth.shear_diagonals", "[1, 2]"},
         BadValue{"granular.count=-1", "granular.count", "[0, 1000000]"},
         BadValue{"granular.radius=0", "granular.radius", "> 0"},
