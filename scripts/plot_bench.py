@@ -60,7 +60,8 @@ def load(path):
         for key in ('wall_ms_per_step', 'max_strain', 'mean_strain', 'energy', 'substeps',
                     'iterations', 'passes', 'mass_ratio', 'end_drop', 'max_penetration',
                     'spring_stiffness', 'final_structural_max_strain',
-                    'final_structural_mean_strain', 'project_ms', 'predict_ms', 'update_ms'):
+                    'final_structural_mean_strain', 'project_ms', 'predict_ms', 'update_ms',
+                    'cpu_ms_per_step'):
             row[key] = number(row.get(key))
         row['ok'] = row.get('exit_status') == '0' and row.get('finite') == '1'
     return rows
@@ -427,17 +428,27 @@ def swinging_summary(add, swinging):
             '%.3g (%.3g ms)' % (top[mx], top['wall_ms_per_step']) if top else '-'))
     add('')
     add('(cell: wall ms per step (setting; final max / mean structural strain).)')
+    loads = [float(x) for r in swinging for x in (r.get('load_rounds') or r.get('load') or '')
+             .split(';') if x]
+    rounds = {r.get('rounds') for r in swinging if r.get('rounds')}
+    if loads:
+        add('')
+        add('Wall times: the median of %s rounds of each run (`wall_ms_rounds` in the CSV); the '
+            '1-minute load average at the start of the runs was %.2f to %.2f on this 2-core '
+            'machine (other builds), so compare times within this run, not across runs.' % (
+                '/'.join(sorted(rounds)) or '1', min(loads), max(loads)))
     add('')
     add('Every run (the command of each is in doc/sweep_swinging.csv):')
     add('')
-    add('| curve | N x M | wall ms/step | project ms | final max strain | final mean strain | '
-        'max strain over the run, all links | verdict | --set |')
-    add('|---|---|---|---|---|---|---|---|---|')
+    add('| curve | N x M | wall ms/step | cpu ms/step | project ms | final max strain | '
+        'final mean strain | max strain over the run, all links | verdict | --set |')
+    add('|---|---|---|---|---|---|---|---|---|---|')
     for curve in curves_of(swinging):
         for r in sorted([r for r in swinging if r['curve'] == curve],
                         key=lambda r: r['wall_ms_per_step']):
-            add('| %s | %dx%d | %.3g | %s | %.3g | %.3g | %.3g | %s | `%s` |' % (
+            add('| %s | %dx%d | %.3g | %s | %s | %.3g | %.3g | %.3g | %s | `%s` |' % (
                 curve, r['substeps'], r['iterations'], r['wall_ms_per_step'],
+                '%.3g' % r['cpu_ms_per_step'] if math.isfinite(r['cpu_ms_per_step']) else '-',
                 '%.3g' % r['project_ms'] if math.isfinite(r['project_ms']) else '-',
                 r[mx], r[mn], r['max_strain'], verdict(r), r.get('sets', '')))
     add('')

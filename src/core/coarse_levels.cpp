@@ -80,14 +80,21 @@ void CoarseLevels::build(int rows, int cols, double spacing, int levels) {
       link.rest_length = spacing * std::sqrt(dr * dr + dc * dc);
       level.links.push_back(link);
     };
-    // Row by row from the first (the pinned edge of the shipped scenes), as the cloth's sweep.
+    // Row by row from the first (the pinned edge of the shipped scenes), and within a row in runs
+    // of links that share no particle, as the cloth's own sweep (cloth_builder.cpp): links of even
+    // then odd columns, every link down to the next row, both diagonals of even then odd cells.
+    // Consecutive projections are then independent and overlap in the processor.
     for (int a = 0; a < nr; ++a) {
-      for (int b = 0; b + 1 < nc; ++b) add(a, b, a, b + 1);
+      for (int parity = 0; parity < 2; ++parity) {
+        for (int b = parity; b + 1 < nc; b += 2) add(a, b, a, b + 1);
+      }
       if (a + 1 == nr) continue;
       for (int b = 0; b < nc; ++b) add(a, b, a + 1, b);
-      for (int b = 0; b + 1 < nc; ++b) {
-        add(a, b, a + 1, b + 1);
-        add(a, b + 1, a + 1, b);
+      for (int parity = 0; parity < 2; ++parity) {
+        for (int b = parity; b + 1 < nc; b += 2) {
+          add(a, b, a + 1, b + 1);
+          add(a, b + 1, a + 1, b);
+        }
       }
     }
     // The finer level's particles this level does not hold, with their coarse cell.
@@ -150,8 +157,10 @@ double CoarseLevels::project(Particles& p, bool interpolate) {
       if (w < kMinInverseMass) continue;
       const Vec3 delta = p.position[link.i] - p.position[link.j];
       const double length = delta.norm();
-      const double excess = length - link.rest_length;
-      if (!(excess > 0.0) || length < kMinLength) continue;
+      if (!(length >= kMinLength)) continue;  // coincident (or not finite): no direction
+      // Slack links get a zero correction rather than a branch: whether a link is taut changes
+      // from link to link, and a mispredicted branch costs more than the arithmetic.
+      const double excess = std::max(0.0, length - link.rest_length);
       const Vec3 correction = (excess / (w * length)) * delta;
       p.position[link.i] -= wi * correction;
       p.position[link.j] += wj * correction;
