@@ -432,6 +432,7 @@ def sweep(name, runs, bin_dir, out_dir, workers, repeat=1):
                                         ' (%d in parallel)' % workers if workers > 1 else ''),
           flush=True)
     begin = time.time()
+    started = time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime(begin))
     rounds = [[] for _ in runs]
 
     def timed_execute(run):
@@ -449,6 +450,8 @@ def sweep(name, runs, bin_dir, out_dir, workers, repeat=1):
                     name, round_index + 1, repeat, count, len(runs), time.time() - begin,
                     describe(rounds[k][-1])), flush=True)
     rows = [median_row(r) if repeat > 1 else r[0] for r in rounds]
+    for row in rows:
+        row['sweep_date'] = started
     write_csv(path, rows)
     print('== %s: %.0f s' % (name, time.time() - begin), flush=True)
 
