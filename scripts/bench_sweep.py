@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """The sweeps behind doc/*.csv: cloth_bench over method x substeps x iterations x ordering on the
-three bench scenes, bullet_cloth_bench over its substep and iteration knobs on the same scenes, and
+four bench scenes, bullet_cloth_bench over its substep and iteration knobs on the same scenes, and
 the stability matrix. Called by scripts/run_bench; one CSV row per run with every key=value field
 the tool printed, plus the overrides that made the run.
 
@@ -23,7 +23,7 @@ REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 # up (finite, but spread over kilometres) one count takes seconds: such a run is stopped and
 # recorded as diverged (exit_status=timeout) instead of holding the sweep for minutes.
 def run_timeout(run):
-    if run.scene in ('hanging.yaml', 'drape.yaml'):
+    if run.scene in CLOTH_SCENES:
         steps = run.duration * 60.0
         return max(20.0, 4.0 * (1.0 + steps * run.fields.get('passes', 1) * 0.6e-3))
     return 120.0
@@ -52,6 +52,7 @@ def splits(totals):
 # at every step of a crumpled 50 x 50 cloth (the cheapest settings) takes up to 20 s a run; every
 # 3rd step (50 ms) changes max_strain by under 2 % and keeps the whole sweep under 15 minutes.
 CLOTH_SAMPLE_EVERY = 3
+CLOTH_SCENES = ('hanging.yaml', 'drape.yaml', 'swinging.yaml')
 
 
 class Run(object):
@@ -66,7 +67,7 @@ class Run(object):
         self.sets = list(sets)
         self.fields = dict(fields)
         self.positions = positions
-        self.sample_every = CLOTH_SAMPLE_EVERY if scene in ('hanging.yaml', 'drape.yaml') else 0
+        self.sample_every = CLOTH_SAMPLE_EVERY if scene in CLOTH_SCENES else 0
 
     def command(self, bin_dir, positions_file=None):
         cmd = [os.path.join(bin_dir, self.tool), '--config', os.path.join('config', self.scene),
@@ -163,6 +164,57 @@ def hanging_runs(quick):
                                 ['solver.spring_stiffness=%g' % k,
                                  'solver.bend_spring_stiffness=0.01'],
                                 spring_stiffness=k))
+    return runs
+
+
+# Curves of the swinging sweep beyond plain xpbd: (--set assignments, CSV fields). Solver options
+# of issue 12 join here, so every method tried lands on the same Pareto chart.
+SWINGING_VARIANTS = {
+    # Long-range links in a hierarchy (solver.levels, coarse_levels.h): 5 levels are all a 50 x 50
+    # grid has (lines 25, 13, 7, 4, 2).
+    'xpbd + levels': (['solver.levels=5'], {'variant': 'levels'},
+                      substeps_only([10, 20, 30, 40, 50, 60, 80, 120])),
+    # HPBD's interpolation of each level's displacement to the finer particles: gains energy.
+    'xpbd + levels, interpolated': (['solver.levels=5', 'solver.levels_interpolate=true'],
+                                    {'variant': 'levels_interpolated'},
+                                    substeps_only([10, 20, 40, 80])),
+}
+
+
+def swinging_runs(quick):
+    """config/swinging.yaml, 3 s (issue 12's benchmark): a flat cloth with both diagonals per cell
+    swinging down from two pinned corners; the error is the final strain of the structural links.
+
+    xpbd runs substeps with one pass each from 5 up to 320 and a few iteration-heavy points; Bullet
+    runs its internal steps with one position pass and, as the figures of issue 12, 10 passes.
+    """
+    duration = 1.0 if quick else 3.0
+    scene = 'swinging.yaml'
+    sweep = 'swinging'
+    if quick:
+        plan = {'xpbd': substeps_only([5, 20]), 'bullet': substeps_only([5, 20]) + [(4, 10)],
+                'xpbd + levels': substeps_only([5, 20])}
+    else:
+        plan = {
+            'xpbd': substeps_only([5, 10, 20, 40, 60, 80, 120, 160, 320]) + [
+                (10, 2), (20, 2), (10, 4), (40, 2), (20, 4)],
+            'bullet': substeps_only([4, 8, 16, 32, 64, 128, 256]) + [(4, 10), (8, 10), (16, 10),
+                                                                     (16, 4), (32, 4)],
+        }
+        for curve, (sets, fields, pairs) in SWINGING_VARIANTS.items():
+            plan[curve] = pairs
+    # Energy at t = 0 (no step): a run whose cloth never fell ends there. Bullet in single precision
+    # at 256 internal steps does: h^2 g = 4e-8 m is below the float resolution at z = 1.5 m.
+    runs = [pbd_run(sweep, scene, 'start', 'xpbd', 1, 1, 0.0, level='start')]
+    for curve, pairs in plan.items():
+        sets, fields, _ = SWINGING_VARIANTS.get(curve, ([], {}, None))
+        for s, i in pairs:
+            if curve.startswith('bullet'):
+                run = bullet_run(sweep, scene, curve, s, i, duration, sets)
+            else:
+                run = pbd_run(sweep, scene, curve, 'xpbd', s, i, duration, sets)
+            run.fields.update(fields)
+            runs.append(run)
     return runs
 
 
@@ -344,20 +396,62 @@ def describe(row):
         row.get('wall_ms_per_step'), row.get('max_strain'), row.get('finite'))
 
 
-def sweep(name, runs, bin_dir, out_dir, workers):
+def load_average():
+    with open('/proc/loadavg') as handle:
+        return handle.read().split()[0]
+
+
+def median_row(rounds):
+    """The row of the round with the median wall time (the runs are deterministic: only the time
+    differs between rounds), with every round's time and the load average at its start."""
+    timed = [r for r in rounds if number_or_none(r.get('wall_ms_per_step')) is not None]
+    if not timed:
+        return rounds[0]
+    timed.sort(key=lambda r: float(r['wall_ms_per_step']))
+    row = dict(timed[(len(timed) - 1) // 2])
+    row['wall_ms_rounds'] = ';'.join(r['wall_ms_per_step'] for r in rounds
+                                     if 'wall_ms_per_step' in r)
+    row['load_rounds'] = ';'.join(r['load'] for r in rounds)
+    row['rounds'] = len(rounds)
+    return row
+
+
+def number_or_none(text):
+    try:
+        return float(text)
+    except (TypeError, ValueError):
+        return None
+
+
+def sweep(name, runs, bin_dir, out_dir, workers, repeat=1):
+    """Runs every command `repeat` times, in rounds (all runs once, then all again: load that
+    drifts over minutes hits every setting alike), and keeps the median time of each."""
     path = os.path.join(out_dir, 'sweep_%s.csv' % name)
-    print('== %s: %d runs -> %s%s' % (name, len(runs), os.path.relpath(path, REPO),
-                                      ' (%d in parallel)' % workers if workers > 1 else ''),
+    print('== %s: %d runs%s -> %s%s' % (name, len(runs), ' x %d rounds' % repeat if repeat > 1
+                                        else '', os.path.relpath(path, REPO),
+                                        ' (%d in parallel)' % workers if workers > 1 else ''),
           flush=True)
     begin = time.time()
-    rows = [None] * len(runs)
-    with concurrent.futures.ThreadPoolExecutor(max_workers=workers) as pool:
-        futures = {pool.submit(execute, run, bin_dir): k for k, run in enumerate(runs)}
-        for count, future in enumerate(concurrent.futures.as_completed(futures), 1):
-            k = futures[future]
-            rows[k] = future.result()
-            print('[%s %3d/%d %5.0f s] %s' % (name, count, len(runs), time.time() - begin,
-                                             describe(rows[k])), flush=True)
+    started = time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime(begin))
+    rounds = [[] for _ in runs]
+
+    def timed_execute(run):
+        load = load_average()
+        row = execute(run, bin_dir)
+        row['load'] = load
+        return row
+    for round_index in range(repeat):
+        with concurrent.futures.ThreadPoolExecutor(max_workers=workers) as pool:
+            futures = {pool.submit(timed_execute, run): k for k, run in enumerate(runs)}
+            for count, future in enumerate(concurrent.futures.as_completed(futures), 1):
+                k = futures[future]
+                rounds[k].append(future.result())
+                print('[%s %d/%d %3d/%d %5.0f s] %s' % (
+                    name, round_index + 1, repeat, count, len(runs), time.time() - begin,
+                    describe(rounds[k][-1])), flush=True)
+    rows = [median_row(r) if repeat > 1 else r[0] for r in rounds]
+    for row in rows:
+        row['sweep_date'] = started
     write_csv(path, rows)
     print('== %s: %.0f s' % (name, time.time() - begin), flush=True)
 
@@ -369,20 +463,27 @@ def main():
                         'bullet_cloth_bench (<workspace>/devel/lib/pbd_cloth)')
     parser.add_argument('--out', default=os.path.join(REPO, 'doc'), help='CSV directory')
     parser.add_argument('--quick', action='store_true', help='small grids (a pipeline check)')
+    parser.add_argument('--repeat', type=int, default=None,
+                        help='rounds of the timed sweeps (median time kept); default 3 for '
+                        'swinging, 1 for the others')
     parser.add_argument('--only', nargs='*', default=None,
-                        help='sweeps to run: hanging drape chain stability (default: all)')
+                        help='sweeps to run: hanging swinging drape chain stability '
+                        '(default: all)')
     args = parser.parse_args()
     bin_dir = os.path.abspath(args.bin_dir)
     for tool in ('cloth_bench', 'bullet_cloth_bench'):
         if not os.access(os.path.join(bin_dir, tool), os.X_OK):
             sys.exit('bench_sweep: %s not found in %s' % (tool, bin_dir))
     os.makedirs(args.out, exist_ok=True)
-    plan = [('hanging', hanging_runs, 1), ('drape', drape_runs, 1), ('chain', chain_runs, 1),
+    # The swinging sweep is issue 12's benchmark: its times are the medians of 3 rounds.
+    plan = [('hanging', hanging_runs, 1, 1), ('swinging', swinging_runs, 1, 3),
+            ('drape', drape_runs, 1, 1), ('chain', chain_runs, 1, 1),
             # Only stability and error are read from this one, not time: both cores.
-            ('stability', stability_runs, 2)]
-    for name, make, workers in plan:
+            ('stability', stability_runs, 2, 1)]
+    for name, make, workers, repeat in plan:
         if args.only is None or name in args.only:
-            sweep(name, make(args.quick), bin_dir, args.out, workers)
+            rounds = 1 if args.quick or name == 'stability' else (args.repeat or repeat)
+            sweep(name, make(args.quick), bin_dir, args.out, workers, rounds)
 
 
 if __name__ == '__main__':

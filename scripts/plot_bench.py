@@ -23,6 +23,9 @@ G = 9.81
 DIVERGED_STRAIN = 1e3     # links 1000 x rest length: blown up (a crumpled cloth reaches 300)
 BOUNDED_ENERGY = 10.0     # stable: energy never above E0 + 10 M g L (test_stability_matrix.cpp)
 TARGET = 0.01             # the tolerance of issue 6: max strain 1 %
+# Issue 12's targets on config/swinging.yaml: final strain of the structural links, max and mean.
+SWING_MAX_TARGET = 0.01
+SWING_MEAN_TARGET = 0.001
 
 # One style per curve of the charts, in legend order.
 STYLES = [
@@ -30,6 +33,8 @@ STYLES = [
     ('xpbd, no bending', dict(color='tab:cyan', marker='o')),
     ('xpbd + tethers', dict(color='navy', marker='*')),
     ('xpbd jacobi', dict(color='tab:purple', marker='v')),
+    ('xpbd + levels', dict(color='darkgreen', marker='h')),
+    ('xpbd + levels, interpolated', dict(color='tab:pink', marker='X')),
     ('pbd', dict(color='tab:green', marker='s')),
     ('verlet', dict(color='tab:olive', marker='D')),
     ('mass_spring', dict(color='tab:brown', marker='P')),
@@ -54,7 +59,9 @@ def load(path):
     for row in rows:
         for key in ('wall_ms_per_step', 'max_strain', 'mean_strain', 'energy', 'substeps',
                     'iterations', 'passes', 'mass_ratio', 'end_drop', 'max_penetration',
-                    'spring_stiffness'):
+                    'spring_stiffness', 'final_structural_max_strain',
+                    'final_structural_mean_strain', 'project_ms', 'predict_ms', 'update_ms',
+                    'cpu_ms_per_step'):
             row[key] = number(row.get(key))
         row['ok'] = row.get('exit_status') == '0' and row.get('finite') == '1'
     return rows
@@ -111,8 +118,10 @@ def pareto_panel(ax, rows, metric, ylabel, target=None):
                 if converged_run(r) and r[metric] > 0]
         bad = [r for r in mine if not converged_run(r)]
         everything += good
-        label = '%s (%d runs%s)' % (name, len(mine),
-                                    ', %d diverged' % len(bad) if bad else '')
+        frozen = sum(1 for r in bad if r.get('frozen'))
+        label = '%s (%d runs%s%s)' % (name, len(mine),
+                                      ', %d diverged' % (len(bad) - frozen) if len(bad) > frozen
+                                      else '', ', %d frozen' % frozen if frozen else '')
         if good:
             ax.scatter([p[0] for p in good], [p[1] for p in good], s=12, alpha=0.3,
                        color=style['color'], marker=style['marker'], linewidths=0)
@@ -144,7 +153,7 @@ def pareto_panel(ax, rows, metric, ylabel, target=None):
     ax.set_xlabel('wall time per step (ms, one thread)')
     ax.set_ylabel(ylabel)
     ax.grid(True, which='major', alpha=0.3)
-    ax.text(0.99, 0.99, 'x at the top: diverged runs (at their time per step)',
+    ax.text(0.99, 0.99, 'x at the top: diverged (or frozen) runs, at their time per step',
             transform=ax.transAxes, ha='right',
             va='top', fontsize=7, color='gray')
 
@@ -367,14 +376,105 @@ def read_microbench(path):
     return list(csv.DictReader(lines[start:]))
 
 
-def summary(data_dir, hanging, drape, chain, stability, env_text):
+def swinging_verdicts(rows):
+    """Drops the t = 0 row and marks runs whose cloth never fell (energy within 1 % of the start's:
+    Bullet in single precision with tiny internal steps) as failed, like diverged ones."""
+    start = [r for r in rows if r.get('level') == 'start']
+    runs = [r for r in rows if r.get('level') != 'start']
+    if start and math.isfinite(start[0]['energy']):
+        e0 = start[0]['energy']
+        for r in runs:
+            if r['ok'] and math.isfinite(r['energy']) and abs(r['energy'] - e0) < 0.01 * abs(e0):
+                r['ok'] = False
+                r['frozen'] = True
+    return runs
+
+
+def verdict(row):
+    if row.get('frozen'):
+        return 'frozen'
+    return 'ok' if converged_run(row) else 'diverged'
+
+
+def swinging_summary(add, swinging):
+    """Issue 12's benchmark: which settings reach 1 % max / 0.1 % mean structural strain."""
+    add('')
+    add('## Swinging cloth (config/swinging.yaml, issue 12): cost of 1 % max / 0.1 % mean strain')
+    add('')
+    add('50 x 50, 1 m, structural links and both diagonals per cell, zero compliance, no bending, '
+        'no tethers; starts flat and swings down from two pinned corners for 3 s at 60 Hz. Error: '
+        'strain of the structural links in the final state (`final_structural_max_strain`, '
+        '`final_structural_mean_strain`), Bullet on the same links. N x M = substeps x '
+        'iterations (Bullet: internal steps x position iterations).')
+    add('')
+    add('| curve | cheapest with max <= 1 % | cheapest with mean <= 0.1 % | cheapest with both | '
+        'best max strain (ms) |')
+    add('|---|---|---|---|---|')
+    mx, mn = 'final_structural_max_strain', 'final_structural_mean_strain'
+
+    def cell(run):
+        if not run:
+            return 'not reached'
+        return '%s (%dx%d; %.3g / %.3g)' % (fmt_ms(run['wall_ms_per_step']), run['substeps'],
+                                            run['iterations'], run[mx], run[mn])
+    for curve in curves_of(swinging):
+        mine = [r for r in swinging if r['curve'] == curve and converged_run(r)]
+        both = [r for r in mine if r[mx] <= SWING_MAX_TARGET and r[mn] <= SWING_MEAN_TARGET]
+        top = min(mine, key=lambda r: r[mx]) if mine else None
+        add('| %s | %s | %s | %s | %s |' % (
+            curve, cell(cheapest(swinging, curve, mx, SWING_MAX_TARGET)),
+            cell(cheapest(swinging, curve, mn, SWING_MEAN_TARGET)),
+            cell(min(both, key=lambda r: r['wall_ms_per_step']) if both else None),
+            '%.3g (%.3g ms)' % (top[mx], top['wall_ms_per_step']) if top else '-'))
+    add('')
+    add('(cell: wall ms per step (setting; final max / mean structural strain).)')
+    loads = [float(x) for r in swinging for x in (r.get('load_rounds') or r.get('load') or '')
+             .split(';') if x]
+    rounds = {r.get('rounds') for r in swinging if r.get('rounds')}
+    if loads:
+        add('')
+        add('Wall times: the median of %s rounds of each run (`wall_ms_rounds` in the CSV); the '
+            '1-minute load average at the start of the runs was %.2f to %.2f on this 2-core '
+            'machine (other builds), so compare times within this run, not across runs.' % (
+                '/'.join(sorted(rounds)) or '1', min(loads), max(loads)))
+    add('')
+    add('Every run (the command of each is in doc/sweep_swinging.csv):')
+    add('')
+    add('| curve | N x M | wall ms/step | cpu ms/step | project ms | final max strain | '
+        'final mean strain | max strain over the run, all links | verdict | --set |')
+    add('|---|---|---|---|---|---|---|---|---|---|')
+    for curve in curves_of(swinging):
+        for r in sorted([r for r in swinging if r['curve'] == curve],
+                        key=lambda r: r['wall_ms_per_step']):
+            add('| %s | %dx%d | %.3g | %s | %s | %.3g | %.3g | %.3g | %s | `%s` |' % (
+                curve, r['substeps'], r['iterations'], r['wall_ms_per_step'],
+                '%.3g' % r['cpu_ms_per_step'] if math.isfinite(r['cpu_ms_per_step']) else '-',
+                '%.3g' % r['project_ms'] if math.isfinite(r['project_ms']) else '-',
+                r[mx], r[mn], r['max_strain'], verdict(r), r.get('sets', '')))
+    add('')
+    add('verdict: ok; diverged (non-finite, or links over %g x rest length at some sample); frozen '
+        '(the cloth never fell: energy within 1 %% of the start, Bullet\'s single precision).'
+        % DIVERGED_STRAIN)
+
+
+def summary(data_dir, hanging, drape, chain, stability, env_text, swinging=()):
     out = []
     add = out.append
     add('# Bench summary')
     add('')
     add('Generated by `scripts/run_bench` (sweeps: `scripts/bench_sweep.py`; charts and this file: '
-        '`scripts/plot_bench.py`). Every figure below comes from the CSVs of that one run, each '
-        'row of which holds the exact command line that produced it.')
+        '`scripts/plot_bench.py`). Every figure below comes from the CSVs listed here, each row of '
+        'which holds the exact command line that produced it. The machine and load below are '
+        'those of the last run; a run with `--only` rewrites only its own CSVs, so compare the '
+        'times of the CSVs written by one run.')
+    add('')
+    for name in ('hanging', 'swinging', 'drape', 'chain', 'stability'):
+        path = os.path.join(data_dir, 'sweep_%s.csv' % name)
+        if os.path.exists(path):
+            with open(path, newline='') as handle:
+                dates = {r.get('sweep_date') for r in csv.DictReader(handle)} - {None, ''}
+            add('- `sweep_%s.csv`: %s' % (name, 'swept %s' % ', '.join(sorted(dates)) if dates
+                                           else 'no sweep date recorded (a run before they were)'))
     if env_text:
         add('')
         add('```')
@@ -485,6 +585,9 @@ def summary(data_dir, hanging, drape, chain, stability, env_text):
             else:
                 add('| %s | not reached | | | |' % curve)
 
+    if swinging:
+        swinging_summary(add, swinging)
+
     if drape:
         add('')
         add('## Drape (config/drape.yaml, 32 x 32 on a ball and table, 3 s)')
@@ -584,9 +687,10 @@ def main():
     data = args.data
     hanging = load(os.path.join(data, 'sweep_hanging.csv'))
     drape = load(os.path.join(data, 'sweep_drape.csv'))
+    swinging = swinging_verdicts(load(os.path.join(data, 'sweep_swinging.csv')))
     chain = load(os.path.join(data, 'sweep_chain.csv'))
     stability = load(os.path.join(data, 'sweep_stability.csv'))
-    if not (hanging or drape or chain or stability):
+    if not (hanging or swinging or drape or chain or stability):
         sys.exit('plot_bench: no sweep_*.csv in %s (run scripts/run_bench first)' % data)
     written = []
     if hanging:
@@ -595,6 +699,18 @@ def main():
                                 ('mean_strain', 'mean strain at the end', TARGET)],
                       'config/hanging.yaml (50 x 50, 1 m, two pinned corners, 3 s at 60 Hz): '
                       'cost against stretch error, pbd_cloth and Bullet on the same links', path)
+        written.append(path)
+    if swinging:
+        path = os.path.join(data, 'pareto_swinging.png')
+        pareto_figure(swinging, [('final_structural_max_strain',
+                                  'max strain of the structural links at the end',
+                                  SWING_MAX_TARGET),
+                                 ('final_structural_mean_strain',
+                                  'mean strain of the structural links at the end',
+                                  SWING_MEAN_TARGET)],
+                      'config/swinging.yaml (issue 12: 50 x 50, both diagonals, no bending, swings '
+                      'from two pinned corners, 3 s at 60 Hz): pbd_cloth and Bullet on the same '
+                      'links', path)
         written.append(path)
     if drape:
         path = os.path.join(data, 'pareto_drape.png')
@@ -620,7 +736,7 @@ def main():
     if args.env and os.path.exists(args.env):
         with open(args.env) as handle:
             env_text = handle.read()
-    text = summary(data, hanging, drape, chain, verdicts, env_text)
+    text = summary(data, hanging, drape, chain, verdicts, env_text, swinging)
     path = os.path.join(data, 'bench_summary.md')
     with open(path, 'w') as handle:
         handle.write(text)

@@ -73,6 +73,13 @@ struct SolverConfig {
   double spring_damping = 0.0;                 // solver.spring_damping (N s/m), mass_spring
   // 0.01: on the 50 x 50 hanging cloth 1.0 already diverges at 240 substeps (scripts/method_table).
   double bend_spring_stiffness = 0.01;  // solver.bend_spring_stiffness, mass_spring
+  // solver.levels: levels of long-range links of the grid cloth's stretch solve (coarse_levels.h,
+  // after hierarchical PBD), each pass coarsest first. 0 = off (the default). Grid cloth and zero
+  // stretch compliance only: the links are inextensible.
+  int levels = 0;
+  // solver.levels_interpolate: HPBD's interpolation of each level's displacement to the finer
+  // particles. Off by default: it gains energy on the swinging cloth (measured; README).
+  bool levels_interpolate = false;
 };
 
 struct FrictionConfig {
@@ -102,6 +109,9 @@ struct ClothConfig {
   std::vector<std::pair<int, double>> point_masses;  // cloth.point_masses [[index, kg]]
   bool tethers = false;                              // cloth.tethers
   bool shear = true;                                 // cloth.shear: diagonal stretch constraints
+  // cloth.shear_diagonals: 1 = each grid cell's triangle diagonal (the mesh edge, as Jolt), 2 =
+  // both diagonals of every cell (Bullet's and Bender's cloth, the issue 12 benchmark). Grid only.
+  int shear_diagonals = 1;
 };
 
 struct GranularConfig {

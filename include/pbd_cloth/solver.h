@@ -5,6 +5,7 @@
 
 #include <vector>
 
+#include "pbd_cloth/coarse_levels.h"
 #include "pbd_cloth/collisions.h"
 #include "pbd_cloth/particles.h"
 #include "pbd_cloth/scene_config.h"
@@ -81,6 +82,8 @@ class Solver {
   SolverConfig config_;
   double stretch_compliance_ = 0.0;
   double bend_compliance_ = -1.0;
+  double spacing_ = 0.0;                // cloth.spacing: the rest geometry of the coarse levels
+  CoarseLevels coarse_;                 // solver.levels; empty when off or the cloth is a mesh
   std::vector<double> stretch_lambda_;  // XPBD multipliers, reset every substep
   Vec3Array bend_lambda_;               // one vector per hinge: C = scale b is vector-valued
   Vec3Array jacobi_delta_;              // Jacobi: summed corrections per particle

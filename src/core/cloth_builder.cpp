@@ -65,18 +65,19 @@ void addStretch(const ClothConfig& cloth, const Vec3Array& x, ClothTopology& top
   }
   topology.structural_count = static_cast<int>(topology.stretch.size());
   if (!cloth.shear) return;
-  // Shear: the diagonal each cell's triangles share (the mesh edges, as Jolt does). Both diagonals
-  // would make every cell a rigid planar frame and lock bending of an inextensible cloth. Cells
-  // two apart share no particle: even cells of a row, then odd ones.
+  // Shear: by default the diagonal each cell's triangles share (the mesh edges, as Jolt does).
+  // Both diagonals (cloth.shear_diagonals: 2, the link set of Bullet's and Bender's cloth, and of
+  // the issue 12 benchmark) make every cell a rigid planar frame: an inextensible cloth then folds
+  // only along the grid lines between cells. Cells two apart share no particle: even cells of a
+  // row, then odd ones; a cell's two diagonals share none either.
+  const bool both = cloth.shear_diagonals == 2;
   for (int r = 0; r + 1 < rows; ++r) {
     for (int parity = 0; parity < 2; ++parity) {
       for (int c = parity; c + 1 < cols; c += 2) {
         const int i = r * cols + c;
-        if ((r + c) % 2 == 0) {
-          add(i, i + cols + 1);
-        } else {
-          add(i + 1, i + cols);
-        }
+        const bool main_diagonal = (r + c) % 2 == 0;  // the triangles' shared edge is a-e
+        if (main_diagonal || both) add(i, i + cols + 1);
+        if (!main_diagonal || both) add(i + 1, i + cols);
       }
     }
   }

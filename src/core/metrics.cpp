@@ -9,17 +9,35 @@
 
 namespace pbd_cloth {
 
-void computeStrain(const Particles& particles, const ClothTopology& topology, double& max_strain,
-                   double& mean_strain) {
+namespace {
+
+// Max and mean |l - l0| / l0 over the stretch constraints [0, count).
+void strainOfFirst(const Particles& particles, const ClothTopology& topology, std::size_t count,
+                   double& max_strain, double& mean_strain) {
   max_strain = 0.0;
   double sum = 0.0;
-  for (const DistanceConstraint& con : topology.stretch) {
+  for (std::size_t c = 0; c < count; ++c) {
+    const DistanceConstraint& con = topology.stretch[c];
     const double length = (particles.position[con.i] - particles.position[con.j]).norm();
     const double strain = std::abs(length - con.rest_length) / con.rest_length;
     max_strain = std::max(max_strain, strain);
     sum += strain;
   }
-  mean_strain = topology.stretch.empty() ? 0.0 : sum / topology.stretch.size();
+  mean_strain = count == 0 ? 0.0 : sum / static_cast<double>(count);
+}
+
+}  // namespace
+
+void computeStrain(const Particles& particles, const ClothTopology& topology, double& max_strain,
+                   double& mean_strain) {
+  strainOfFirst(particles, topology, topology.stretch.size(), max_strain, mean_strain);
+}
+
+void computeStructuralStrain(const Particles& particles, const ClothTopology& topology,
+                             double& max_strain, double& mean_strain) {
+  const std::size_t count = std::min(
+      topology.stretch.size(), static_cast<std::size_t>(std::max(0, topology.structural_count)));
+  strainOfFirst(particles, topology, count, max_strain, mean_strain);
 }
 
 bool allFinite(const Particles& particles) {

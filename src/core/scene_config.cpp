@@ -197,6 +197,7 @@ void validateSolver(const SolverConfig& s) {
   checkNumber("solver.spring_stiffness", s.spring_stiffness, kPositive);
   checkNumber("solver.spring_damping", s.spring_damping, kNonNegative);
   checkNumber("solver.bend_spring_stiffness", s.bend_spring_stiffness, kNonNegative);
+  checkInteger("solver.levels", s.levels, 0, 16);
 }
 
 void validateCloth(const ClothConfig& c) {
@@ -220,6 +221,7 @@ void validateCloth(const ClothConfig& c) {
                                           " = " + std::to_string(count));
     }
     checkNumber("cloth.spacing", c.spacing, kPositive);
+    checkInteger("cloth.shear_diagonals", c.shear_diagonals, 1, 2);
   }
   checkNumber("cloth.mass", c.mass, kPositive);
   checkFinite("cloth.origin", c.origin);
@@ -419,6 +421,16 @@ void validate(const SceneConfig& scene) {
   checkNumber("publish_rate", scene.publish_rate, Range{0.0, scene.step_rate, true, false});
   validateSolver(scene.solver);
   validateCloth(scene.cloth);
+  if (scene.solver.levels > 0 && !scene.cloth.mesh.empty()) {
+    throw ConfigError("solver.levels",
+                      "coarse levels need a grid cloth; cloth.mesh is set (use 0)");
+  }
+  if (scene.solver.levels > 0 && scene.cloth.stretch_compliance > 0.0) {
+    throw ConfigError(
+        "solver.levels",
+        "coarse levels are inextensible: they need cloth.stretch_compliance = 0, got " +
+            std::to_string(scene.cloth.stretch_compliance) + " (use 0 levels)");
+  }
   validateGranular(scene.granular);
   std::set<std::string> names;
   for (std::size_t k = 0; k < scene.grippers.size(); ++k) {

@@ -394,6 +394,8 @@ void Simulation::step(double dt) {
 Metrics Simulation::computeMetrics() const {
   Metrics metrics;
   computeStrain(particles_, topology_, metrics.max_strain, metrics.mean_strain);
+  computeStructuralStrain(particles_, topology_, metrics.structural_max_strain,
+                          metrics.structural_mean_strain);
   metrics.max_penetration = collisions_.maxPenetration(particles_, topology_);
   metrics.finite = allFinite(particles_);
   // A diverged state has no meaningful geometry to intersect.

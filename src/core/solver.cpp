@@ -60,6 +60,12 @@ void Solver::configure(const SolverConfig& solver, const ClothConfig& cloth) {
   config_ = solver;
   stretch_compliance_ = cloth.stretch_compliance;
   bend_compliance_ = cloth.bend_compliance;
+  spacing_ = cloth.spacing;
+  // A live change of solver.levels rebuilds them for the grid prepare() saw (not during a step).
+  if (coarse_.rows() > 0 &&
+      (coarse_.requested() != config_.levels || coarse_.spacing() != spacing_)) {
+    coarse_.build(coarse_.rows(), coarse_.cols(), spacing_, config_.levels);
+  }
 }
 
 void Solver::prepare(const Particles& particles, const ClothTopology& topology) {
@@ -78,6 +84,11 @@ void Solver::prepare(const Particles& particles, const ClothTopology& topology) 
   start_velocity_.assign(n, Vec3::Zero());
   constraint_force_.assign(n, Vec3::Zero());
   support_force_.assign(n, Vec3::Zero());
+  if (topology.rows > 0 && !topology.from_mesh) {
+    coarse_.build(topology.rows, topology.cols, spacing_, config_.levels);
+  } else {
+    coarse_.build(0, 0, 0.0, 0);
+  }
 }
 
 void Solver::initializeVelocities(Particles& particles, double dt) const {
@@ -403,7 +414,14 @@ double Solver::projectPass(double h, Particles& p, const ClothTopology& topology
                            Collisions& collisions, bool /*first_pass*/) {
   // The count of the last pass is what the step reports: constraints still degenerate at its end.
   startDegenerateCount();
-  double max_change = projectStretch(h, p, topology);
+  // Long-range levels first (solver.levels): they remove in one projection a stretch spread over
+  // many links, which the cloth's own sweep carries one link per pass. Off while the cloth is
+  // compliant (they are inextensible); the explicit springs do not come here.
+  double max_change = 0.0;
+  if (coarse_.levelCount() > 0 && stretch_compliance_ == 0.0) {
+    max_change = coarse_.project(p, config_.levels_interpolate);
+  }
+  max_change = std::max(max_change, projectStretch(h, p, topology));
   max_change = std::max(max_change, projectBend(h, p, topology));
   if (config_.ordering == Ordering::kJacobi) applyJacobi(p, max_change);
   max_change = std::max(max_change, projectTethers(p, topology));

@@ -213,11 +213,11 @@ YAML::Node listOf(const MapReader& map, const std::string& name, const char* exp
 // --- Sections ------------------------------------------------------------------------------------
 
 void readSolver(const YAML::Node& node, SolverConfig& s) {
-  const MapReader map(
-      node, "solver",
-      {"method", "substeps", "iterations", "tolerance", "ordering", "relaxation",
-       "jacobi_averaging", "gravity", "damping", "stretch_stiffness", "bend_stiffness",
-       "spring_stiffness", "spring_damping", "bend_spring_stiffness"});
+  const MapReader map(node, "solver",
+                      {"method", "substeps", "iterations", "tolerance", "ordering", "relaxation",
+                       "jacobi_averaging", "gravity", "damping", "stretch_stiffness",
+                       "bend_stiffness", "spring_stiffness", "spring_damping",
+                       "bend_spring_stiffness", "levels", "levels_interpolate"});
   if (map.has("method")) {
     s.method = toWord(map.get("method"), map.keyOf("method"),
                       {Method::kXpbd, Method::kPbd, Method::kVerlet, Method::kMassSpring});
@@ -238,13 +238,16 @@ void readSolver(const YAML::Node& node, SolverConfig& s) {
   map.read("spring_stiffness", s.spring_stiffness);
   map.read("spring_damping", s.spring_damping);
   map.read("bend_spring_stiffness", s.bend_spring_stiffness);
+  map.read("levels", s.levels);
+  map.read("levels_interpolate", s.levels_interpolate);
 }
 
 void readCloth(const YAML::Node& node, ClothConfig& c) {
-  const MapReader map(node, "cloth",
-                      {"mesh", "mesh_scale", "rows", "cols", "spacing", "mass", "origin", "rpy",
-                       "stretch_compliance", "bend_compliance", "thickness", "self_collision",
-                       "friction", "pinned", "point_masses", "tethers", "shear"});
+  const MapReader map(
+      node, "cloth",
+      {"mesh", "mesh_scale", "rows", "cols", "spacing", "mass", "origin", "rpy",
+       "stretch_compliance", "bend_compliance", "thickness", "self_collision", "friction", "pinned",
+       "point_masses", "tethers", "shear", "shear_diagonals"});
   map.read("mesh", c.mesh);
   map.read("mesh_scale", c.mesh_scale);
   map.read("rows", c.rows);
@@ -259,6 +262,7 @@ void readCloth(const YAML::Node& node, ClothConfig& c) {
   map.read("self_collision", c.self_collision);
   map.read("tethers", c.tethers);
   map.read("shear", c.shear);
+  map.read("shear_diagonals", c.shear_diagonals);
 
   const MapReader friction(map.get("friction"), map.keyOf("friction"), {"static", "kinetic"});
   friction.read("static", c.friction.static_coefficient);

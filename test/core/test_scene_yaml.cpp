@@ -185,7 +185,7 @@ solver: {method: pbd, substeps: 3, iterations: 7, tolerance: 1e-6, ordering: jac
 cloth: {rows: 4, cols: 5, spacing: 0.1, mass: 2, origin: [1, 2, 3], rpy: [0.1, 0.2, 0.3],
         stretch_compliance: 1e-4, bend_compliance: -1, thickness: 0.02, self_collision: false,
         friction: {static: 0.8, kinetic: 0.8}, pinned: [0, 4, 19], point_masses: [[19, 1.5], [3, 0.25]],
-        tethers: true, shear: false}
+        tethers: true, shear: false, shear_diagonals: 2}
 granular: {count: 12, radius: 0.02, mass: 0.005, region: {min: [0, 0, 0], max: [0, 1, 2]}}
 )"));
   EXPECT_EQ(s.frame_id, "map");
@@ -223,6 +223,7 @@ granular: {count: 12, radius: 0.02, mass: 0.005, region: {min: [0, 0, 0], max: [
   EXPECT_EQ(s.cloth.point_masses[1], std::make_pair(3, 0.25));
   EXPECT_TRUE(s.cloth.tethers);
   EXPECT_FALSE(s.cloth.shear);
+  EXPECT_EQ(s.cloth.shear_diagonals, 2);
   EXPECT_EQ(s.granular.count, 12);
   EXPECT_EQ(s.granular.radius, 0.02);
   EXPECT_EQ(s.granular.mass, 0.005);
@@ -404,6 +405,10 @@ INSTANTIATE_TEST_SUITE_P(
                  "out of range"},
         BadValue{"cloth.point_masses=[[3, 0]]", "cloth.point_masses[0]", "> 0"},
         BadValue{"cloth.point_masses=[[3]]", "cloth.point_masses[0]", "[index, kg]"},
+        BadValue{"cloth.shear_diagonals=3", "cloth.shear_diagonals", "[1, 2]"},
+        BadValue{"solver.levels=17", "solver.levels", "[0, 16]"},
+        BadValue{"solver.levels=-1", "solver.levels", "[0, 16]"},
+        BadValue{"cloth.shear_diagonals=0", "cloth.shear_diagonals", "[1, 2]"},
         BadValue{"granular.count=-1", "granular.count", "[0, 1000000]"},
         BadValue{"granular.radius=0", "granular.radius", "> 0"},
         BadValue{"granular.mass=-1", "granular.mass", "> 0"},

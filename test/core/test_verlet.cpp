@@ -2,9 +2,14 @@
 // projection, the relaxation loop and its adaptive iteration count.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <set>
+#include <utility>
 
+#include "pbd_cloth/metrics.h"
 #include "pbd_cloth/simulation.h"
 #include "test_scenes.h"
 
@@ -157,6 +162,55 @@ TEST(ClothGrid, CountsAndPins) {
   EXPECT_EQ(sim.particles().position[0], p0);
   EXPECT_EQ(sim.particles().position[6], p6);
   EXPECT_LT(sim.particles().position[34].z(), -0.1);  // the free corner fell
+}
+
+// cloth.shear_diagonals: 2 adds the second diagonal of every cell, after the structural links
+// (which stay first, so the structural strain is still stretch[0, structural_count)); each of them
+// is a cell diagonal at its rest length, and no link appears twice.
+TEST(ClothGrid, BothDiagonalsPerCell) {
+  SceneConfig scene = test::clothScene(5, 7, 0.1, Method::kXpbd);
+  scene.cloth.shear_diagonals = 2;
+  Simulation sim(scene);
+  const ClothTopology& topology = sim.topology();
+  EXPECT_EQ(topology.structural_count, 5 * 6 + 4 * 7);
+  ASSERT_EQ(static_cast<int>(topology.stretch.size()), 5 * 6 + 4 * 7 + 2 * 4 * 6);
+  std::set<std::pair<int, int>> seen;
+  for (std::size_t c = 0; c < topology.stretch.size(); ++c) {
+    const DistanceConstraint& con = topology.stretch[c];
+    const int dr = std::abs(con.i / 7 - con.j / 7), dc = std::abs(con.i % 7 - con.j % 7);
+    const bool structural = static_cast<int>(c) < topology.structural_count;
+    EXPECT_EQ(dr + dc, structural ? 1 : 2) << "constraint " << c;
+    if (!structural) EXPECT_TRUE(dr == 1 && dc == 1) << "constraint " << c;
+    EXPECT_NEAR(con.rest_length, structural ? 0.1 : 0.1 * std::sqrt(2.0), 1e-12);
+    EXPECT_TRUE(seen.emplace(std::min(con.i, con.j), std::max(con.i, con.j)).second)
+        << "constraint " << c << " repeats a link";
+  }
+  // The triangles are those of one diagonal: the second diagonal is a link, not a mesh edge.
+  EXPECT_EQ(topology.triangleCount(), 2 * 4 * 6);
+}
+
+// The structural strain leaves the shear links out: stretching only the diagonals of a cloth
+// changes max_strain but not structural_max_strain.
+TEST(ClothGrid, StructuralStrainCountsRowsAndColumnsOnly) {
+  SceneConfig scene = test::clothScene(3, 3, 0.1, Method::kXpbd);
+  scene.cloth.shear_diagonals = 2;
+  Simulation sim(scene);
+  Particles particles = sim.particles();
+  ClothTopology topology = sim.topology();
+  for (std::size_t c = topology.structural_count; c < topology.stretch.size(); ++c) {
+    topology.stretch[c].rest_length *= 0.5;  // every diagonal now reads strain 1
+  }
+  double max_all = 0.0, mean_all = 0.0, max_structural = 1.0, mean_structural = 1.0;
+  computeStrain(particles, topology, max_all, mean_all);
+  computeStructuralStrain(particles, topology, max_structural, mean_structural);
+  EXPECT_NEAR(max_all, 1.0, 1e-12);
+  EXPECT_NEAR(mean_all, 8.0 / (12.0 + 8.0), 1e-12);  // 8 diagonals of 20 links
+  EXPECT_NEAR(max_structural, 0.0, 1e-12);
+  EXPECT_NEAR(mean_structural, 0.0, 1e-12);
+  // Stretching one structural link shows in both.
+  particles.position[2].x() += 0.01;  // particle (0, 2): link (0,1)-(0,2) is 0.11 m long
+  computeStructuralStrain(particles, topology, max_structural, mean_structural);
+  EXPECT_NEAR(max_structural, 0.1, 1e-9);
 }
 
 TEST(ClothGrid, RopeHasNoTriangles) {
