@@ -1,7 +1,7 @@
 // The set_state path (cloth_bench --load-state, ~set_state after message conversion): any bytes
 // as a state file are refused with a reason or fit the scene (a 6 x 6 cloth with a gripper and a
-// sphere: state_scene.yaml); a state that fits is set and stepped, and then every position must be finite (setState
-// refuses non-finite values).
+// sphere: state_scene.yaml); a state that fits is set and stepped, and then every position must be
+// finite (setState refuses non-finite values).
 #include <cmath>
 #include <sstream>
 
