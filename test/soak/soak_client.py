@@ -133,6 +133,18 @@ class Soak:
             time.sleep(0.1)
         if self.last is None:
             return ['no state from the node']
+        # Warm-up, before the clock starts: one of each kind of request, and a depth camera
+        # subscriber for a few images (the first one sizes the render buffers and messages), so
+        # the memory baseline is not taken before the node has done everything once.
+        camera = rospy.Subscriber(NODE + '/camera/depth/points', PointCloud2, lambda _: None,
+                                  queue_size=1)
+        self.grasp(True)
+        self.grasp(False)
+        self.set_state(self.get_state().state)
+        self.reset()
+        time.sleep(3.0)
+        camera.unregister()
+        time.sleep(1.0)
         start = time.time()
         baseline_rejected = self.last.stats.rejected_inputs
         settle = min(60.0, self.duration / 2.0)
