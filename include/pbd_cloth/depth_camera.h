@@ -89,6 +89,13 @@ class DepthRenderer {
 void addDepthNoise(float* depth, std::size_t count, double sigma, std::uint64_t seed,
                    std::uint64_t frame, double range_min, double range_max);
 
+// The noise of camera `camera_index` of the scene (config.noise, config.seed) on its image of the
+// state at `sim_time`: addDepthNoise with the stream of (seed, camera index) and the image's index
+// round(sim_time * rate). The node and cloth_bench --depth both call this, so the same scene gives
+// the same noisy image in either; cameras given the same seed still get independent noise.
+void addCameraNoise(float* depth, std::size_t count, const CameraConfig& config,
+                    std::size_t camera_index, double sim_time);
+
 // The point seen at pixel (u, v) with depth z, in the optical frame.
 inline Vec3 unprojectDepth(const PinholeCamera& camera, int u, int v, double z) {
   return Vec3((u - camera.cx) * z / camera.fx, (v - camera.cy) * z / camera.fy, z);

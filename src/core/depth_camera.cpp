@@ -369,4 +369,11 @@ void addDepthNoise(float* depth, std::size_t count, double sigma, std::uint64_t 
   }
 }
 
+void addCameraNoise(float* depth, std::size_t count, const CameraConfig& config,
+                    std::size_t camera_index, double sim_time) {
+  const std::uint64_t stream = (static_cast<std::uint64_t>(config.seed) << 16) | camera_index;
+  const auto image = static_cast<std::uint64_t>(std::llround(sim_time * config.rate));
+  addDepthNoise(depth, count, config.noise, stream, image, config.range_min, config.range_max);
+}
+
 }  // namespace pbd_cloth

@@ -23,9 +23,7 @@ DepthCameras::DepthCameras(ros::NodeHandle nh_private, const SceneConfig& scene,
     auto camera = std::make_unique<Camera>();
     camera->config = config;
     camera->pinhole = PinholeCamera::fromConfig(config);
-    // The camera's index is mixed in so that cameras given the same seed still see independent
-    // noise.
-    camera->noise_seed = (static_cast<std::uint64_t>(config.seed) << 16) | k;
+    camera->index = k;
     camera->ticks = PublishTicks(config.rate);
     camera->depth.resize(camera->pinhole.pixelCount());
     const std::string base = config.name + "/depth/";
@@ -152,11 +150,9 @@ void DepthCameras::publish(Camera& camera, const Frame& pose) {
   const PinholeCamera& pinhole = camera.pinhole;
   const int width = pinhole.width, height = pinhole.height;
   camera.renderer.render(camera.rendering, pinhole, pose, camera.depth.data());
-  // The image index in simulated time: the same noise for the same image whoever asks.
-  const auto frame =
-      static_cast<std::uint64_t>(std::llround(camera.rendering.time * camera.config.rate));
-  addDepthNoise(camera.depth.data(), camera.depth.size(), camera.config.noise, camera.noise_seed,
-                frame, pinhole.range_min, pinhole.range_max);
+  // The same noise for the same image whoever renders it (cloth_bench --depth too).
+  addCameraNoise(camera.depth.data(), camera.depth.size(), camera.config, camera.index,
+                 camera.rendering.time);
 
   std_msgs::Header header;
   header.stamp = camera.rendering_stamp;

@@ -215,11 +215,8 @@ double writeDepthImages(const pbd_cloth::SceneConfig& scene, const pbd_cloth::Si
       seconds += std::chrono::duration<double>(Clock::now() - begin).count();
       ++renders;
     }
-    // The node's noise for the image at this time (same seed and image index).
-    const auto frame = static_cast<std::uint64_t>(std::llround(sim.time() * config.rate));
-    pbd_cloth::addDepthNoise(depth.data(), depth.size(), config.noise,
-                             (static_cast<std::uint64_t>(config.seed) << 16) | k, frame,
-                             camera.range_min, camera.range_max);
+    // The node's noise for the image at this time.
+    pbd_cloth::addCameraNoise(depth.data(), depth.size(), config, k, sim.time());
     writePfm(prefix + config.name + ".pfm", camera, depth);
   }
   return 1e3 * seconds / renders;

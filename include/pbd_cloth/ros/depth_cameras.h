@@ -66,7 +66,7 @@ class DepthCameras {
   struct Camera {
     CameraConfig config;
     PinholeCamera pinhole;
-    std::uint64_t noise_seed = 0;
+    std::size_t index = 0;  // in the scene's cameras (addCameraNoise)
     PublishTicks ticks;
     ros::Publisher image_pub, info_pub, points_pub;
     // Written by the step thread, taken by the render thread (under mutex_).
