@@ -80,6 +80,11 @@ struct SolverConfig {
   // solver.levels_interpolate: HPBD's interpolation of each level's displacement to the finer
   // particles. Off by default: it gains energy on the swinging cloth (measured; README).
   bool levels_interpolate = false;
+  // solver.max_speed (m/s): a free particle faster than this after a step means the step blew up
+  // (its kinetic energy m v^2 / 2 per particle is out of bounds). Where fault recovery is on (the
+  // node), that step is undone: Simulation::step, "Faults". Nothing a robot handles moves a cloth
+  // at 100 m/s; a gripper jumping 1 m in one 60 Hz step drags its neighbours at about 60 m/s.
+  double max_speed = 100.0;
 };
 
 struct FrictionConfig {

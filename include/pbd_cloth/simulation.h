@@ -3,6 +3,7 @@
 // node and cloth_bench both drive this class, so a scene replays offline exactly as in the node.
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -14,6 +15,28 @@
 #include "pbd_cloth/solver.h"
 
 namespace pbd_cloth {
+
+// A step whose result could not stand (Simulation::step, fault recovery).
+struct StepFault {
+  enum class Kind {
+    kNone,
+    kNonFinite,  // a particle's position or velocity is NaN or Inf
+    kTooFast,    // a free particle moves faster than solver.max_speed: an energy blow-up
+  };
+  Kind kind = Kind::kNone;
+  int particle = -1;   // the first particle found at fault
+  double speed = 0.0;  // its speed (m/s), kTooFast
+  double time = 0.0;   // simulated time at the end of the step that was undone (s)
+};
+
+// "particle 12 not finite" / "particle 12 at 1.3e+04 m/s (solver.max_speed 100 m/s)".
+std::string describe(const StepFault& fault, double max_speed);
+
+// Faults a test can inject inside the next step (Simulation::injectFaultForTesting).
+enum class InjectedFault {
+  kNaN,     // the first free particle's position becomes NaN before the constraints are solved
+  kBlowUp,  // after they are, the first free particle gets 1000 x solver.max_speed more speed
+};
 
 struct GraspResult {
   bool success = false;
@@ -105,6 +128,26 @@ class Simulation {
   // Accuracy metrics of the current state (strain, penetration, self-intersections, energy).
   Metrics computeMetrics() const;
 
+  // Fault recovery (off by default; the node turns it on). After each step every particle is
+  // checked: a non-finite position or velocity, or a free particle faster than solver.max_speed,
+  // means the step failed (a bad input that got past the checks, an unstable setting, a bug).
+  // The step is then undone: every free particle goes back to its position at the start of the
+  // step, at rest (the momentum that blew up is not replayed), kinematic particles stay where
+  // their grippers put them, and time goes on. Off, a failed step stays as it is: the benchmarks
+  // and stability tests must see a method diverge.
+  void setFaultRecovery(bool on) { fault_recovery_ = on; }
+  bool faultRecovery() const { return fault_recovery_; }
+  // Steps undone since construction (reset does not clear it), whether the last one was, and the
+  // fault of the latest undone step.
+  std::uint64_t restoredSteps() const { return restored_steps_; }
+  bool lastStepRestored() const { return last_step_restored_; }
+  const StepFault& lastFault() const { return last_fault_; }
+  // The check itself, on the current state (kNone: the state can stand).
+  StepFault findFault() const;
+  // Test hook: corrupts the next step from inside (InjectedFault says where), so a test can see
+  // the recovery catch it.
+  void injectFaultForTesting(InjectedFault fault) { injected_fault_ = fault, inject_ = true; }
+
  private:
   struct GripperState {
     Pose pose;          // pose at the end of the last step
@@ -138,6 +181,8 @@ class Simulation {
   int changeGrasp(int gripper, bool grasp);
   void releaseGrasp(GripperState& gripper);
   void kinematicSetChanged();
+  void undoStep(const StepFault& fault);
+  void injectFault(double dt);
   // setState's check: empty when the state fits this scene, else what does not.
   std::string checkState(const SimulationState& state) const;
 
@@ -155,6 +200,15 @@ class Simulation {
   std::vector<double> joint_positions_;
   std::vector<Pose> link_poses_;
   double time_ = 0.0;
+  // Fault recovery: the free particles' positions at the start of the step (sized in build(),
+  // so the copy each step allocates nothing).
+  bool fault_recovery_ = false;
+  Vec3Array good_position_;
+  std::uint64_t restored_steps_ = 0;
+  bool last_step_restored_ = false;
+  StepFault last_fault_;
+  bool inject_ = false;
+  InjectedFault injected_fault_ = InjectedFault::kNaN;
 };
 
 // Live poses (grippers, obstacles, robot links) farther than this from the scene origin in any

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 #include "pbd_cloth/cloth_builder.h"
@@ -79,6 +80,8 @@ void Simulation::build() {
     if (!trajectory.empty()) grippers_[g].pose = grippers_[g].target = trajectory.front().pose;
   }
   time_ = 0.0;
+  good_position_ = particles_.position;
+  last_step_restored_ = false;
   computeStrain(particles_, topology_, solver_.mutableStats().max_strain,
                 solver_.mutableStats().mean_strain);
 }
@@ -378,17 +381,102 @@ void Simulation::updateKinematicTargets(double dt) {
 }
 
 void Simulation::step(double dt) {
+  if (fault_recovery_) {
+    std::copy(particles_.position.begin(), particles_.position.end(), good_position_.begin());
+  }
   followTrajectories(time_ + dt);
   followJointTrajectory(time_ + dt);
   moveRobotColliders();
   updateKinematicTargets(dt);
+  if (inject_ && injected_fault_ == InjectedFault::kNaN) injectFault(dt);
   solver_.step(dt, particles_, topology_, collisions_);
+  if (inject_ && injected_fault_ == InjectedFault::kBlowUp) injectFault(dt);
   for (GripperState& state : grippers_) state.pose = state.target;
   for (RobotLinkState& link : links_) link.pose = link.target;
   time_ += dt;
+  last_step_restored_ = false;
+  if (fault_recovery_) {
+    const StepFault fault = findFault();
+    if (fault.kind != StepFault::Kind::kNone) undoStep(fault);
+  }
   StepStats& stats = solver_.mutableStats();
   computeStrain(particles_, topology_, stats.max_strain, stats.mean_strain);
   stats.max_penetration = collisions_.maxPenetration(particles_, topology_);
+}
+
+StepFault Simulation::findFault() const {
+  StepFault fault;
+  fault.time = time_;
+  const double max_speed_sq = scene_.solver.max_speed * scene_.solver.max_speed;
+  for (int i = 0; i < particles_.size(); ++i) {
+    const Vec3& x = particles_.position[i];
+    const Vec3& v = particles_.velocity[i];
+    // One finiteness test for both: a sum of finite numbers is finite unless it overflows, and
+    // any NaN or Inf term makes it non-finite.
+    if (!std::isfinite(x.sum() + v.sum())) {
+      fault.kind = StepFault::Kind::kNonFinite;
+      fault.particle = i;
+      return fault;
+    }
+    if (fault.kind == StepFault::Kind::kNone && !particles_.isKinematic(i) &&
+        v.squaredNorm() > max_speed_sq) {
+      // Keep looking: a non-finite particle further on is the worse news.
+      fault.kind = StepFault::Kind::kTooFast;
+      fault.particle = i;
+      fault.speed = v.norm();
+    }
+  }
+  return fault;
+}
+
+// The step could not stand: free particles back to the start of the step, at rest; kinematic ones
+// keep the positions their grippers gave them (finite: every pose is checked on the way in).
+void Simulation::undoStep(const StepFault& fault) {
+  for (int i = 0; i < particles_.size(); ++i) {
+    const bool keep = particles_.isKinematic(i) && std::isfinite(particles_.position[i].sum());
+    if (!keep) particles_.position[i] = good_position_[i];
+    particles_.velocity[i].setZero();
+    particles_.substep_start[i] = particles_.position[i];
+    particles_.step_start[i] = particles_.position[i];
+  }
+  ++restored_steps_;
+  last_step_restored_ = true;
+  last_fault_ = fault;
+}
+
+// A NaN goes in before the solver, which spreads it through the constraints. A blow-up goes in
+// after it, as if the solver had produced it: a single fast particle going in would be pulled back
+// by its zero-compliance links within the step (PBD's unconditional stability), testing nothing.
+void Simulation::injectFault(double dt) {
+  inject_ = false;
+  for (int i = 0; i < particles_.size(); ++i) {
+    if (particles_.isKinematic(i)) continue;
+    if (injected_fault_ == InjectedFault::kNaN) {
+      particles_.position[i].x() = std::numeric_limits<double>::quiet_NaN();
+    } else {
+      const Vec3 kick(1000.0 * scene_.solver.max_speed, 0.0, 0.0);
+      particles_.velocity[i] += kick;
+      particles_.position[i] += kick * dt;
+    }
+    return;
+  }
+}
+
+std::string describe(const StepFault& fault, double max_speed) {
+  std::ostringstream out;
+  switch (fault.kind) {
+    case StepFault::Kind::kNone:
+      return "no fault";
+    case StepFault::Kind::kNonFinite:
+      out << "particle " << fault.particle << " not finite";
+      break;
+    case StepFault::Kind::kTooFast:
+      out << "particle " << fault.particle << " at " << fault.speed << " m/s (solver.max_speed "
+          << max_speed << " m/s)";
+      break;
+  }
+  out << " at t = " << fault.time << " s";
+  return out.str();
 }
 
 Metrics Simulation::computeMetrics() const {

@@ -40,10 +40,17 @@ void ClothDiagnostics::simulationStatus(diagnostic_updater::DiagnosticStatusWrap
   const bool slow_steps = mean_step > health_.step_period;
   const bool slow_clock =
       health_.clock_factor_valid && health_.clock_factor < config_.min_real_time_factor;
+  const std::uint64_t restored = health_.restored_steps - restored_at_last_report_;
+  restored_at_last_report_ = health_.restored_steps;
   if (!health_.finite) {
     status.summary(DiagnosticStatus::ERROR,
                    "the simulation diverged (non-finite positions): ~state is not published; "
                    "call ~reset");
+  } else if (restored > 0) {
+    status.summaryf(DiagnosticStatus::ERROR,
+                    "%llu step(s) failed since the last report and were undone, back to the last "
+                    "good state (latest: %s)",
+                    static_cast<unsigned long long>(restored), health_.last_fault.c_str());
   } else if (health_.time_source == TimeSource::kWallClock && (slow_rate || slow_steps)) {
     status.summaryf(DiagnosticStatus::WARN,
                     "cannot keep real time: real-time factor %.2f, a step takes %.1f ms for a "
@@ -82,6 +89,8 @@ void ClothDiagnostics::simulationStatus(diagnostic_updater::DiagnosticStatusWrap
   status.add("max strain", health_.max_strain);
   status.add("max penetration (m)", health_.max_penetration);
   status.add("degenerate constraints (last step)", health_.degenerate_constraints);
+  status.add("restored steps", health_.restored_steps);
+  status.add("last fault", health_.last_fault);
   if (health_.has_cameras) {
     status.add("depth images published", health_.camera_images);
     status.add("depth images dropped (render thread busy)", health_.camera_images_dropped);

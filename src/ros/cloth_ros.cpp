@@ -55,6 +55,8 @@ ClothRos::ClothRos(ros::NodeHandle nh, ros::NodeHandle nh_private)
       loadRobotDescription(scene);
     }
     sim_ = std::make_unique<Simulation>(scene);
+    // A step that blows up is undone and reported, never published (README "Faults").
+    sim_->setFaultRecovery(true);
     config_ = readNodeParameters(nh_private_);
   } catch (const ConfigError& error) {
     ROS_FATAL("Invalid parameter in %s: %s", nh_private_.getNamespace().c_str(), error.what());
@@ -86,6 +88,12 @@ ClothRos::ClothRos(ros::NodeHandle nh, ros::NodeHandle nh_private)
   // the node (a missing ~<name>/grasp service cannot be called) and is counted as rejected.
   grasp_by_name_sub_ =
       nh_private_.subscribe("grasp_by_name", 10, &ClothRos::graspByNameCallback, this);
+  if (config_.fault_injection) {
+    inject_fault_sub_ =
+        nh_private_.subscribe("inject_fault", 10, &ClothRos::injectFaultCallback, this);
+    ROS_WARN("~fault_injection is on: %s corrupts the next step on request (a test hook).",
+             nh_private_.resolveName("inject_fault").c_str());
+  }
   createBodies();
   cameras_ = std::make_unique<DepthCameras>(nh_private_, scene, tf_buffer_);
 
@@ -288,13 +296,16 @@ void ClothRos::pollTfFrames(double arrival) {
     ros::Time stamp;
     PoseTransformer::Failure failure;
     bool found = pose_transformer_->lookupFrame(body.tf_frame, pose, stamp, failure);
-    // The latest transform of a frame whose broadcaster stopped stays in the buffer (10 s): for a
-    // link that would be a ghost standing in the cloth. Stamp 0 is a static transform.
-    if (found && body.kind == BodyKind::kRobotLink && !stamp.isZero() &&
-        arrival - stamp.toSec() > config_.robot_tf_timeout) {
+    // The latest transform of a frame whose broadcaster stopped stays in the buffer: for a link
+    // that would be a ghost standing in the cloth; a gripper or obstacle would stay put anyway
+    // (the follower never extrapolates), but silently. Stamp 0 is a static transform.
+    const bool link = body.kind == BodyKind::kRobotLink;
+    const double stale_after = link ? config_.robot_tf_timeout : config_.body_tf_timeout;
+    if (found && !stamp.isZero() && arrival - stamp.toSec() > stale_after) {
       std::ostringstream detail;
-      detail << "newest transform is " << arrival - stamp.toSec() << " s old (~robot_tf_timeout "
-             << config_.robot_tf_timeout << " s)";
+      detail << "newest transform is " << arrival - stamp.toSec() << " s old ("
+             << (link ? "~robot_tf_timeout " : "~body_tf_timeout ") << stale_after << " s)";
+      if (!link) detail << "; the " << kindName(body.kind) << " stays where it is";
       failure = {RejectReason::kTfFailure, detail.str()};
       found = false;
     }
@@ -467,6 +478,7 @@ void ClothRos::stepOnce() {
   pollTfFrames(inputTime());
   driveBodies(step_clock_.stateTime(sim_->time() + period).toSec());
   sim_->step();
+  if (sim_->lastStepRestored()) reportRestoredStep();
   real_time_factor_.add(ros::WallTime::now().toSec(), sim_->time());
   if (!config_.publish_clock) {
     clock_factor_.add(ros::Time::now().toSec(), sim_->time());
@@ -486,6 +498,31 @@ void ClothRos::stepOnce() {
   }
   // A diverged state is not shown to the cameras either (publishOutputs reports it).
   if (!cameras_->empty() && allFinite(sim_->particles())) cameras_->afterStep(*sim_, stateTime());
+}
+
+// The step failed and Simulation undid it (fault recovery): the state is the one before it, at
+// rest, and the simulation goes on. The diagnostics report it as an error too.
+void ClothRos::reportRestoredStep() {
+  ROS_ERROR_THROTTLE(5.0,
+                     "A step failed (%s): it was undone, back to the last good state at rest, and "
+                     "the simulation goes on (%llu undone since start; ~state "
+                     "stats.restored_steps).",
+                     describe(sim_->lastFault(), sim_->scene().solver.max_speed).c_str(),
+                     static_cast<unsigned long long>(sim_->restoredSteps()));
+}
+
+void ClothRos::injectFaultCallback(const std_msgs::String& msg) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (msg.data == "nan") {
+    sim_->injectFaultForTesting(InjectedFault::kNaN);
+  } else if (msg.data == "blowup") {
+    sim_->injectFaultForTesting(InjectedFault::kBlowUp);
+  } else {
+    rejections_.reject(inject_fault_sub_.getTopic(), RejectReason::kBadValue,
+                       "'" + msg.data + "' is not a fault: \"nan\" or \"blowup\"");
+    return;
+  }
+  ROS_WARN("Fault injection: '%s' in the next step.", msg.data.c_str());
 }
 
 // Coincident particles (a cloth crushed flat by a gripper, a bad initial state) leave their stretch
@@ -539,6 +576,10 @@ void ClothRos::diagnosticsCallback(const ros::WallTimerEvent& /*event*/) {
   health.max_penetration = stats.max_penetration;
   health.degenerate_constraints = static_cast<int>(stats.degenerate_constraints);
   health.finite = allFinite(sim_->particles());
+  health.restored_steps = sim_->restoredSteps();
+  if (health.restored_steps > 0) {
+    health.last_fault = describe(sim_->lastFault(), sim_->scene().solver.max_speed);
+  }
   health.has_cameras = !cameras_->empty();
   health.camera_images = cameras_->framesPublished();
   health.camera_images_dropped = cameras_->framesDropped();

@@ -134,6 +134,8 @@ ClothRos::Config readNodeParameters(const ros::NodeHandle& nh_private) {
   readBool("publish_clock", config.publish_clock);
   read("max_real_time_factor", config.max_real_time_factor, 0.0, true);
   read("robot_tf_timeout", config.robot_tf_timeout, 0.0, false);
+  read("body_tf_timeout", config.body_tf_timeout, 0.0, false);
+  readBool("fault_injection", config.fault_injection);
   if (config.max_real_time_factor > 0.0 && !config.publish_clock) {
     ROS_WARN(
         "%s is %g but %s is false: the limit applies only when the node is the clock; ignored.",

@@ -217,7 +217,7 @@ void readSolver(const YAML::Node& node, SolverConfig& s) {
                       {"method", "substeps", "iterations", "tolerance", "ordering", "relaxation",
                        "jacobi_averaging", "gravity", "damping", "stretch_stiffness",
                        "bend_stiffness", "spring_stiffness", "spring_damping",
-                       "bend_spring_stiffness", "levels", "levels_interpolate"});
+                       "bend_spring_stiffness", "levels", "levels_interpolate", "max_speed"});
   if (map.has("method")) {
     s.method = toWord(map.get("method"), map.keyOf("method"),
                       {Method::kXpbd, Method::kPbd, Method::kVerlet, Method::kMassSpring});
@@ -240,6 +240,7 @@ void readSolver(const YAML::Node& node, SolverConfig& s) {
   map.read("bend_spring_stiffness", s.bend_spring_stiffness);
   map.read("levels", s.levels);
   map.read("levels_interpolate", s.levels_interpolate);
+  map.read("max_speed", s.max_speed);
 }
 
 void readCloth(const YAML::Node& node, ClothConfig& c) {

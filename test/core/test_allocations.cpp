@@ -160,6 +160,27 @@ TEST(Allocations, ScriptedGraspAndReleaseAllocateNothing) {
   }
 }
 
+// Fault recovery checks every step and undoes a failed one from buffers sized at build: a NaN
+// and a blow-up injected in the counted steps are caught and undone without allocating.
+TEST(Allocations, FaultRecoveryAllocatesNothing) {
+  SceneConfig scene = test::clothScene(20, 20, 0.03, Method::kXpbd);
+  scene.cloth.pinned = {0, 19};
+  scene.solver.substeps = 4;
+  Simulation sim(scene);
+  sim.setFaultRecovery(true);
+  for (int k = 0; k < 3; ++k) sim.step();
+  g_allocations = 0;
+  g_counting = true;
+  for (int k = 0; k < 10; ++k) {
+    if (k == 3) sim.injectFaultForTesting(InjectedFault::kNaN);
+    if (k == 6) sim.injectFaultForTesting(InjectedFault::kBlowUp);
+    sim.step();
+  }
+  g_counting = false;
+  EXPECT_EQ(sim.restoredSteps(), 2u);
+  EXPECT_EQ(g_allocations.load(), 0);
+}
+
 // Forward kinematics runs every step: with `out` at its size it allocates nothing (a revolute,
 // prismatic, fixed and mimic joint on the way).
 TEST(Allocations, RobotLinkPosesAllocateNothing) {

@@ -2,7 +2,7 @@
 //   "<node>: simulation"  step time, real-time factor, solver figures; WARN when the node cannot
 //                         keep real time (under /use_sim_time: cannot keep up with /clock; as
 //                         the clock, ~publish_clock: never), ERROR when the state is no longer
-//                         finite;
+//                         finite or a step was undone since the previous report (fault);
 //   "<node>: inputs"      rejected inputs, total and by reason, and the latest one; WARN when some
 //                         were rejected since the previous report.
 #pragma once
@@ -41,6 +41,9 @@ struct SimulationHealth {
   double max_penetration = 0.0;    // m
   int degenerate_constraints = 0;  // skipped in the last step (coincident particles)
   bool finite = true;
+  // Steps undone by fault recovery since start, and the latest one's fault (Simulation).
+  std::uint64_t restored_steps = 0;
+  std::string last_fault;
   // Depth cameras (depth_cameras.h), counts since start: images published, dropped because the
   // render thread was still busy, skipped because tf lacked the camera's frame.
   bool has_cameras = false;
@@ -78,6 +81,7 @@ class ClothDiagnostics {
   // Read by the status callbacks during report().
   SimulationHealth health_;
   const InputRejections* rejections_ = nullptr;
+  std::uint64_t restored_at_last_report_ = 0;
   // Step wall times since the previous report.
   int step_count_ = 0;
   double step_time_sum_ = 0.0;

@@ -80,6 +80,7 @@
 #include <geometry_msgs/PoseStamped.h>
 #include <ros/callback_queue.h>
 #include <ros/ros.h>
+#include <std_msgs/String.h>
 #include <std_srvs/SetBool.h>
 #include <std_srvs/Trigger.h>
 #include <tf2_ros/buffer.h>
@@ -116,6 +117,14 @@ class ClothRos {
     // ~robot_tf_timeout (s of ROS time): a robot link whose newest transform is older is left out.
     // robot_state_publisher sends moving links at 50 Hz: 0.5 s is 25 missed messages.
     double robot_tf_timeout = 0.5;
+    // ~body_tf_timeout (s of ROS time): a gripper or obstacle following a tf frame whose newest
+    // transform is older stays where it is, with a warning (its broadcaster may have died while
+    // the gripper holds the cloth: following the stale transform would be the same, but silent).
+    double body_tf_timeout = 0.5;
+    // ~fault_injection: a test hook. On, the node subscribes ~inject_fault (std_msgs/String,
+    // "nan" or "blowup") and corrupts its next step from inside (Simulation::injectFaultForTesting)
+    // so a test can see the recovery. Off by default; never on in a robot's launch file.
+    bool fault_injection = false;
   };
 
   // Reads and validates the scene and the node settings, builds the simulation and starts the
@@ -166,6 +175,8 @@ class ClothRos {
   bool graspCallback(const Body& body, std_srvs::SetBool::Request& request,
                      std_srvs::SetBool::Response& response);
   void graspByNameCallback(const diagnostic_msgs::KeyValue& msg);
+  void injectFaultCallback(const std_msgs::String& msg);
+  void reportRestoredStep();
   SolverTuning reconfigure(const SolverTuning& requested, unsigned groups);
 
   // All expect mutex_ held.
@@ -225,6 +236,7 @@ class ClothRos {
   ros::ServiceServer get_state_service_;
   ros::ServiceServer set_state_service_;
   ros::Subscriber grasp_by_name_sub_;
+  ros::Subscriber inject_fault_sub_;  // ~fault_injection only
   std::unique_ptr<SolverReconfigure> reconfigure_;
   std::unique_ptr<ClothDiagnostics> diagnostics_;
   std::unique_ptr<DepthCameras> cameras_;  // cameras: (depth_cameras.h), its own render thread
