@@ -98,6 +98,10 @@ class Collisions {
   // Deepest violation of any contact constraint in the current positions (m): particle inside an
   // obstacle (radius minus distance), particle pair overlap, vertex closer than h to a triangle.
   double maxPenetration(const Particles& particles, const ClothTopology& topology) const;
+  // Free particles deeper than `slack` (m) inside each enabled collider: inside[k] of them, the
+  // first first_inside[k] (-1: none). For the start-up warning about an overlapping start.
+  void countInside(const Particles& particles, double slack, std::vector<int>& inside,
+                   std::vector<int>& first_inside) const;
 
   // Saving and restoring a state (sim_state.h): a collider's pose, target and flags (the name is
   // left to the caller), and the mesh colliders' per-contact search caches.

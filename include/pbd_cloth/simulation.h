@@ -128,6 +128,14 @@ class Simulation {
   // Accuracy metrics of the current state (strain, penetration, self-intersections, energy).
   Metrics computeMetrics() const;
 
+  // What is wrong with the initial state without making it invalid (an overlapping start):
+  // particles starting inside an obstacle (pushed out over the first steps, no faster than the
+  // contact's separation speed) and a cloth starting self-intersecting (self-collision keeps
+  // layers apart but cannot untangle them); granular particles overlapping each other are simply
+  // separated (CollisionGranular.OverlappingParticlesSeparateWithoutPopping). One message each,
+  // naming the obstacle and the first particle; the node logs them at start-up.
+  const std::vector<std::string>& startWarnings() const { return start_warnings_; }
+
   // Fault recovery (off by default; the node turns it on). After each step every particle is
   // checked: a non-finite position or velocity, or a free particle faster than solver.max_speed,
   // means the step failed (a bad input that got past the checks, an unstable setting, a bug).
@@ -182,6 +190,7 @@ class Simulation {
   void releaseGrasp(GripperState& gripper);
   void kinematicSetChanged();
   void undoStep(const StepFault& fault);
+  void findStartWarnings();
   void injectFault(double dt);
   // setState's check: empty when the state fits this scene, else what does not.
   std::string checkState(const SimulationState& state) const;
@@ -202,6 +211,7 @@ class Simulation {
   double time_ = 0.0;
   // Fault recovery: the free particles' positions at the start of the step (sized in build(),
   // so the copy each step allocates nothing).
+  std::vector<std::string> start_warnings_;
   bool fault_recovery_ = false;
   Vec3Array good_position_;
   std::uint64_t restored_steps_ = 0;

@@ -433,6 +433,23 @@ void Collisions::endStep() {
   for (std::size_t k = 0; k < obstacles_.size(); ++k) obstacles_[k].pose = obstacle_targets_[k];
 }
 
+void Collisions::countInside(const Particles& particles, double slack, std::vector<int>& inside,
+                             std::vector<int>& first_inside) const {
+  inside.assign(shapes_.size(), 0);
+  first_inside.assign(shapes_.size(), -1);
+  for (std::size_t k = 0; k < shapes_.size(); ++k) {
+    if (!enabled_[k]) continue;
+    const Frame frame = frameFromPose(obstacles_[k].pose);
+    for (int i = 0; i < particles.size(); ++i) {
+      if (particles.inverse_mass[i] == 0.0) continue;
+      const double depth =
+          particles.radius[i] - signedDistance(shapes_[k], frame.toLocal(particles.position[i]));
+      if (depth <= slack) continue;
+      if (inside[k]++ == 0) first_inside[k] = i;
+    }
+  }
+}
+
 double Collisions::maxPenetration(const Particles& particles, const ClothTopology& topology) const {
   double depth = 0.0;
   if (bounds_.enabled) {

@@ -59,6 +59,31 @@ Simulation::Simulation(const SceneConfig& scene) : scene_(scene) {
   joint_positions_.assign(joint_count, 0.0);
   link_poses_.reserve(robot.model.links.size());
   build();
+  findStartWarnings();
+}
+
+void Simulation::findStartWarnings() {
+  // 1 mm: a cloth laid on a surface within its thickness is resting, not overlapping.
+  constexpr double kSlack = 1e-3;
+  std::vector<int> inside, first;
+  collisions_.countInside(particles_, kSlack, inside, first);
+  for (std::size_t k = 0; k < inside.size(); ++k) {
+    if (inside[k] == 0) continue;
+    std::ostringstream out;
+    out << "overlapping start: " << inside[k] << " particle(s) start more than 1 mm inside "
+        << "obstacle '" << collisions_.obstacles()[k].name << "' (first: particle " << first[k]
+        << "); they are pushed out over the first steps";
+    start_warnings_.push_back(out.str());
+  }
+  if (!topology_.triangles.empty()) {
+    const int crossings = countSelfIntersections(particles_, topology_);
+    if (crossings > 0) {
+      start_warnings_.push_back(
+          "overlapping start: the cloth starts self-intersecting (" + std::to_string(crossings) +
+          " edge-triangle crossings); self-collision keeps its layers apart but cannot untangle "
+          "them");
+    }
+  }
 }
 
 void Simulation::build() {

@@ -66,6 +66,9 @@ ClothRos::ClothRos(ros::NodeHandle nh, ros::NodeHandle nh_private)
   for (const std::string& warning : scene.load_warnings) {
     ROS_WARN("Scene: %s", warning.c_str());
   }
+  for (const std::string& warning : sim_->startWarnings()) {
+    ROS_WARN("Scene: %s", warning.c_str());
+  }
   step_clock_ = StepClock(StepClock::Config{1.0 / scene.step_rate, config_.max_catch_up_steps});
   publish_ticks_ = PublishTicks(scene.publish_rate);
   ROS_INFO(

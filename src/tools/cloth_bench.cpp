@@ -227,6 +227,9 @@ double writeDepthImages(const pbd_cloth::SceneConfig& scene, const pbd_cloth::Si
 BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options,
                      std::ofstream& csv, std::ofstream& positions, std::ofstream& mesh) {
   pbd_cloth::Simulation sim(scene);
+  for (const std::string& warning : sim.startWarnings()) {
+    std::fprintf(stderr, "warning: %s\n", warning.c_str());
+  }
   if (!options.load_state.empty()) {
     pbd_cloth::SimulationState state;
     std::string reason;

@@ -294,6 +294,21 @@ TEST(ClothMesh, TooManyVerticesAreRefusedBeforeTheyAreRead) {
       << error.substr(0, 200);
 }
 
+// A garment whose file starts with one layer through another loads (it is a valid mesh), and the
+// start-up warnings say so: self-collision cannot untangle crossed layers.
+TEST(ClothMesh, SelfIntersectingStartIsWarnedAbout) {
+  // Two separate triangles: the second's edge (0.2 0.2 -0.5)-(0.3 0.2 0.5) pierces the first.
+  SceneConfig scene = meshScene(writeObj("crossed.obj",
+                                         "v 0 0 0\nv 1 0 0\nv 0 1 0\n"
+                                         "v 0.2 0.2 -0.5\nv 0.3 0.2 0.5\nv 0.2 0.3 0.5\n"
+                                         "f 1 2 3\nf 4 5 6\n"));
+  scene.cloth.self_collision = true;
+  const Simulation sim(scene);
+  ASSERT_EQ(sim.startWarnings().size(), 1u);
+  EXPECT_NE(sim.startWarnings()[0].find("starts self-intersecting"), std::string::npos)
+      << sim.startWarnings()[0];
+}
+
 TEST(ClothMesh, AcceptedFlawsLoadWithAWarningNamingThem) {
   const std::string square = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n";
   // A quad: split as a fan into 2 triangles (1 2 3, 1 3 4).

@@ -343,6 +343,12 @@ TEST(CollisionInitialOverlap, ClothStartingInsideBoxLeavesWithoutPopping) {
   scene.obstacles = {test::box("block", Vec3(0.5, 0.5, 0.2), test::makePose(Vec3(0, 0, -0.1)))};
   Simulation sim(scene);
   EXPECT_GT(sim.computeMetrics().max_penetration, 0.02);
+  // Not silent: one start-up warning names the obstacle, how many particles and the first.
+  ASSERT_EQ(sim.startWarnings().size(), 1u);
+  EXPECT_NE(sim.startWarnings()[0].find("64 particle(s) start more than 1 mm inside obstacle "
+                                        "'block' (first: particle 0)"),
+            std::string::npos)
+      << sim.startWarnings()[0];
   double max_speed = 0.0;
   for (int k = 0; k < 60; ++k) {
     sim.step();
@@ -354,6 +360,16 @@ TEST(CollisionInitialOverlap, ClothStartingInsideBoxLeavesWithoutPopping) {
   // Resolving 2.5 cm by projection within one substep would fling it at ~15 m/s.
   EXPECT_LT(max_speed, 0.2);
   for (const Vec3& x : sim.particles().position) EXPECT_NEAR(x.z(), 0.005, 1e-6);
+}
+
+// A cloth resting on the box within its thickness is no overlap (a mesh cloth that starts
+// self-intersecting: ClothMesh.SelfIntersectingStartIsWarnedAbout).
+TEST(CollisionInitialOverlap, RestingOnABoxIsNoOverlap) {
+  SceneConfig scene = test::clothScene(8, 8, 0.02, Method::kXpbd);
+  scene.cloth.thickness = 0.005;
+  scene.cloth.origin = Vec3(-0.07, 0.07, 0.005);
+  scene.obstacles = {test::box("block", Vec3(0.5, 0.5, 0.2), test::makePose(Vec3(0, 0, -0.1)))};
+  EXPECT_TRUE(Simulation(scene).startWarnings().empty());
 }
 
 }  // namespace
