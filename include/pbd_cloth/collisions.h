@@ -94,6 +94,9 @@ class Collisions {
   double project(Particles& particles, const ClothTopology& topology);
   // Ends the step: obstacles arrive at their targets.
   void endStep();
+  // Between steps: contact lists that an extreme step grew beyond their reserve go back to it
+  // (SelfCollision::releaseExcessCapacity). Returns the bytes released.
+  std::size_t releaseExcessCapacity();
 
   // Deepest violation of any contact constraint in the current positions (m): particle inside an
   // obstacle (radius minus distance), particle pair overlap, vertex closer than h to a triangle.

@@ -49,6 +49,9 @@ class ParticleContacts {
   // Deepest overlap (r_i + r_j - |p_i - p_j|) over the candidate pairs (m).
   double maxPenetration(const Particles& particles) const;
   int pairCount() const { return static_cast<int>(pairs_.size()); }
+  // Between steps: the pair lists go back to their reserve after a step that outgrew it
+  // (SelfCollision::releaseExcessCapacity). Returns the bytes released.
+  std::size_t releaseExcessCapacity();
 
  private:
   void findNewPairs(const Particles& particles, const Vec3Array& lo, const Vec3Array& hi);
@@ -57,6 +60,7 @@ class ParticleContacts {
   SpatialHash hash_;
   Vec3Array grown_lo_;  // swept boxes grown by the particle radius
   Vec3Array grown_hi_;
+  std::size_t reserved_pairs_ = 0;  // capacity reserve() gave pairs_ and previous_
   std::vector<ParticlePair> pairs_;
   std::vector<ParticlePair> previous_;  // the list before a search within the step
 };

@@ -73,6 +73,10 @@ class SelfCollision {
   // triangle; edges' closest points interior, edges within a few thicknesses) (m).
   double maxPenetration(const Particles& particles, double thickness) const;
   int pairCount() const { return static_cast<int>(pairs_.size()); }
+  // Between steps: the candidate lists go back to their reserve once an extreme step that
+  // outgrew it is over (a fast fold can need many times the usual candidates, and a node that
+  // kept that peak for good would grow with every new extreme). Returns the bytes released.
+  std::size_t releaseExcessCapacity();
   int vertexTrianglePairCount() const { return pairCount() - edge_pair_count_; }
   int edgeEdgePairCount() const { return edge_pair_count_; }
 
@@ -90,6 +94,7 @@ class SelfCollision {
   Vec3Array triangle_hi_;
   Vec3Array edge_lo_;  // edge boxes: the union of their two vertices' grown boxes
   Vec3Array edge_hi_;
+  std::size_t reserved_pairs_ = 0;      // capacity reserve() gave pairs_ and previous_
   std::vector<SelfContactPair> pairs_;  // edge-edge pairs first, then vertex-triangle pairs
   int edge_pair_count_ = 0;
   std::vector<SelfContactPair> previous_;  // vertex-triangle pairs before a search within the step

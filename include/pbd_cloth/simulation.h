@@ -144,6 +144,10 @@ class Simulation {
   // their grippers put them, and time goes on. Off, a failed step stays as it is: the benchmarks
   // and stability tests must see a method diverge.
   void setFaultRecovery(bool on) { fault_recovery_ = on; }
+  // Between steps (never inside one): buffers an extreme step grew beyond what build() reserved
+  // go back to that reserve, contents kept, so a long-running node does not keep the peak of
+  // every extreme for good. The results do not change. Returns the bytes released.
+  std::size_t releaseExcessCapacity() { return collisions_.releaseExcessCapacity(); }
   bool faultRecovery() const { return fault_recovery_; }
   // Steps undone since construction (reset does not clear it), whether the last one was, and the
   // fault of the latest undone step.

@@ -433,6 +433,10 @@ void Collisions::endStep() {
   for (std::size_t k = 0; k < obstacles_.size(); ++k) obstacles_[k].pose = obstacle_targets_[k];
 }
 
+std::size_t Collisions::releaseExcessCapacity() {
+  return particle_contacts_.releaseExcessCapacity() + self_collision_pairs_.releaseExcessCapacity();
+}
+
 void Collisions::countInside(const Particles& particles, double slack, std::vector<int>& inside,
                              std::vector<int>& first_inside) const {
   inside.assign(shapes_.size(), 0);

@@ -1,5 +1,7 @@
 #include "pbd_cloth/particle_contacts.h"
 
+#include "pbd_cloth/buffer_capacity.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -34,8 +36,13 @@ void ParticleContacts::reserve(const Particles& particles) {
   grown_lo_.reserve(n);
   grown_hi_.reserve(n);
   const int granular = n - particles.cloth_count;
-  pairs_.reserve(16 * static_cast<std::size_t>(granular));
-  previous_.reserve(pairs_.capacity());
+  reserved_pairs_ = 16 * static_cast<std::size_t>(granular);
+  pairs_.reserve(reserved_pairs_);
+  previous_.reserve(reserved_pairs_);
+}
+
+std::size_t ParticleContacts::releaseExcessCapacity() {
+  return shrinkToReserve(pairs_, reserved_pairs_) + shrinkToReserve(previous_, reserved_pairs_);
 }
 
 void ParticleContacts::findPairs(const Particles& p, const Vec3Array& lo, const Vec3Array& hi,

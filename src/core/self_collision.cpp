@@ -1,5 +1,7 @@
 #include "pbd_cloth/self_collision.h"
 
+#include "pbd_cloth/buffer_capacity.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -138,9 +140,15 @@ void SelfCollision::reserve(const Particles& particles, const ClothTopology& top
   edge_lo_.reserve(edges);
   edge_hi_.reserve(edges);
   // Typical scenes need 2-4 candidates per triangle and edge; a cloth falling fast into a fold
-  // needs more, and capacity then grows once and stays.
-  pairs_.reserve(8 * static_cast<std::size_t>(triangles + edges));
-  previous_.reserve(pairs_.capacity());
+  // needs more: the list then grows in that step, and releaseExcessCapacity gives the excess
+  // back between steps once it is over.
+  reserved_pairs_ = 8 * static_cast<std::size_t>(triangles + edges);
+  pairs_.reserve(reserved_pairs_);
+  previous_.reserve(reserved_pairs_);
+}
+
+std::size_t SelfCollision::releaseExcessCapacity() {
+  return shrinkToReserve(pairs_, reserved_pairs_) + shrinkToReserve(previous_, reserved_pairs_);
 }
 
 void SelfCollision::findPairs(const Particles& p, const ClothTopology& topology,

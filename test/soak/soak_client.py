@@ -6,12 +6,19 @@
 # - no ~state ever carries a non-finite position or velocity;
 # - the node stays up and keeps stepping (sim_time grows; the real-time factor in ~state stays
 #   at or above MIN_RTF in at least 95 % of the seconds after the first);
-# - the node's resident memory (VmRSS of its process) grows less than 1 % from the end of the
-#   first minute (the first half, for runs shorter than 2 minutes) to the end;
+# - the node's resident memory at rest (VmRSS of its process) grows less than 1 % from the end of
+#   the first minute (the first half, for runs shorter than 2 minutes) to the end. "At rest": the
+#   client pauses, drops its camera subscriber and waits REST_S, so that what roscpp still has
+#   queued for a slow subscriber (one 160 x 120 cloud is 307 kB, about 1 % of the node) and the
+#   heap pages the node gives back every 5 s do not decide the figure; both readings are taken
+#   the same way;
 # - stats.rejected_inputs grew by exactly the number of bad inputs sent.
 # Prints the figures and FAIL lines; exit status 0 when every check holds.
 #
-#   soak_client.py <duration s> <node pid> [seed]
+# With --rtf-report-only the real-time factor is printed, not checked (scripts/run_tests: a test
+# never asserts wall-clock speed on a shared machine; the long run of the README checks it).
+#
+#   soak_client.py <duration s> <node pid> [seed] [--rtf-report-only]
 import math
 import random
 import sys
@@ -28,6 +35,7 @@ from std_srvs.srv import SetBool, Trigger
 
 NODE = '/cloth_node'
 MIN_RTF = 0.9
+REST_S = 7.0  # longer than the node's 5 s period of giving free heap pages back
 
 
 def rss_kb(pid):
@@ -39,8 +47,9 @@ def rss_kb(pid):
 
 
 class Soak:
-    def __init__(self, duration, pid, seed):
+    def __init__(self, duration, pid, seed, rtf_report_only=False):
         self.duration, self.pid = duration, pid
+        self.rtf_report_only = rtf_report_only
         self.random = random.Random(seed)
         self.lock = threading.Lock()
         self.states = 0
@@ -126,6 +135,13 @@ class Soak:
                 self.camera.unregister()
                 self.camera = None
 
+    def rss_at_rest(self):
+        if self.camera is not None:
+            self.camera.unregister()
+            self.camera = None
+        time.sleep(REST_S)
+        return rss_kb(self.pid)
+
     def run(self):
         self.failures = []
         deadline = time.time() + 20.0
@@ -151,10 +167,10 @@ class Soak:
         rss_start = None
         while time.time() - start < self.duration and not rospy.is_shutdown():
             if rss_start is None and time.time() - start >= settle:
-                rss_start = rss_kb(self.pid)
+                rss_start = self.rss_at_rest()
             self.act()
             time.sleep(self.random.uniform(0.02, 0.2))
-        rss_end = rss_kb(self.pid)
+        rss_end = self.rss_at_rest()
         time.sleep(1.0)  # the last rejections reach the published stats
         with self.lock:
             last, states, non_finite = self.last, self.states, self.non_finite
@@ -166,10 +182,11 @@ class Soak:
         print('soak: %.0f s, %d states, actions %s' % (time.time() - start, states,
                                                       sorted(self.actions.items())))
         print('soak: rejected inputs %d, bad inputs sent %d' % (rejected, self.bad_sent))
-        print('soak: resident memory %d kB after %.0f s, %d kB at the end (%+.2f %%)'
+        print('soak: resident memory at rest %d kB after %.0f s, %d kB at the end (%+.2f %%)'
               % (rss_start, settle, rss_end, 100.0 * growth))
-        print('soak: real-time factor >= %.1f in %.1f %% of the states' % (MIN_RTF,
-                                                                         100.0 * good_rtf))
+        print('soak: real-time factor >= %.1f in %.1f %% of the states%s'
+              % (MIN_RTF, 100.0 * good_rtf, ' (reported, not checked)' if self.rtf_report_only
+                 else ''))
         if non_finite:
             self.failures.append('%d states with non-finite values' % non_finite)
         if rejected != self.bad_sent:
@@ -177,18 +194,20 @@ class Soak:
                                  % (rejected, self.bad_sent))
         if growth >= 0.01:
             self.failures.append('resident memory grew %.2f %%' % (100.0 * growth))
-        if good_rtf < 0.95:
+        if good_rtf < 0.95 and not self.rtf_report_only:
             self.failures.append('real-time factor below %.1f in %.0f %% of the states'
                                  % (MIN_RTF, 100.0 * (1.0 - good_rtf)))
         return self.failures
 
 
 def main():
-    duration, pid = float(sys.argv[1]), int(sys.argv[2])
-    seed = int(sys.argv[3]) if len(sys.argv) > 3 else 1
+    args = [a for a in sys.argv[1:] if not a.startswith('--')]
+    rtf_report_only = '--rtf-report-only' in sys.argv[1:]
+    duration, pid = float(args[0]), int(args[1])
+    seed = int(args[2]) if len(args) > 2 else 1
     rospy.init_node('soak_client')
     try:
-        failures = Soak(duration, pid, seed).run()
+        failures = Soak(duration, pid, seed, rtf_report_only).run()
     except Exception as error:  # the node died, a service vanished
         failures = ['unexpected %s: %s' % (type(error).__name__, error)]
     for failure in failures:

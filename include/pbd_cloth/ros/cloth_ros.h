@@ -168,6 +168,10 @@ class ClothRos {
   // The loop of the thread that steps and publishes /clock (publish_clock only).
   void clockLoop();
   void diagnosticsCallback(const ros::WallTimerEvent& event);
+  // Between steps: buffers an extreme step outgrew go back to their reserve
+  // (Simulation::releaseExcessCapacity) and the heap's free pages back to the system (glibc).
+  void memoryCallback(const ros::WallTimerEvent& event);
+  static constexpr double kMemoryReleasePeriod = 5.0;  // s of wall time
   bool resetCallback(std_srvs::Trigger::Request& request, std_srvs::Trigger::Response& response);
   bool getStateCallback(GetState::Request& request, GetState::Response& response);
   bool setStateCallback(SetState::Request& request, SetState::Response& response);
@@ -243,6 +247,7 @@ class ClothRos {
   // Declared last so they stop first on destruction, before the simulation they drive.
   ros::WallTimer step_timer_;
   ros::WallTimer diagnostics_timer_;
+  ros::WallTimer memory_timer_;
   std::unique_ptr<ros::AsyncSpinner> input_spinner_;
   std::atomic<bool> clock_running_{false};
   std::thread clock_thread_;  // publish_clock only
