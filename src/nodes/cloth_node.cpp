@@ -14,10 +14,10 @@ int main(int argc, char** argv) {
 #ifdef __GLIBC__
   // A fixed mmap threshold. glibc raises it each time a large block is freed; after that the
   // depth images, clouds and their serialized copies (77 kB to MBs, made and freed at the camera
-  // rate by several threads) are carved from the threads' heaps among small blocks, which
-  // fragment: resident memory crept up by 1-2 % a minute with the live heap flat (heaptrack,
-  // README "Soak"). Fixed, each such block is mapped and unmapped whole (a few system calls per
-  // image). A nodelet manager gets the same with MALLOC_MMAP_THRESHOLD_=65536 in its environment.
+  // rate by several threads) are carved from the threads' heaps among small blocks, where they
+  // fragment and stay resident after they are freed (README "Soak": a long run must not grow).
+  // Fixed, each such block is mapped and unmapped whole (a few system calls per image). A
+  // nodelet manager gets the same with MALLOC_MMAP_THRESHOLD_=65536 in its environment.
   mallopt(M_MMAP_THRESHOLD, 64 * 1024);
 #endif
   ros::init(argc, argv, "cloth_node");
