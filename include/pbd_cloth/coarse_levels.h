@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "pbd_cloth/particles.h"
+#include "pbd_cloth/stretch_links.h"
 
 namespace pbd_cloth {
 
@@ -35,9 +36,11 @@ class CoarseLevels {
   int requested() const { return requested_; }
   double spacing() const { return spacing_; }
 
+  // Before a step's sweeps: the links' inverse masses (the kinematic set is fixed for a step).
+  void prepareStep(const Particles& p);
   // One sweep over the coarse levels, coarsest first, on the cloth particles (kinematic particles
-  // do not move). Returns the largest correction of a coarse link.
-  double project(Particles& p, bool interpolate);
+  // do not move). Returns the largest correction of a coarse link. simd: solver.simd.
+  double project(Particles& p, bool interpolate, bool simd = true);
 
  private:
   struct Link {
@@ -61,6 +64,7 @@ class CoarseLevels {
     // link weighs its ends by inverse_mass / carried, so the cloth it moves keeps its momentum.
     std::vector<double> carried;
     std::vector<Link> links;               // row by row
+    StretchLinks flat;                     // the same links, flat and batched (no interpolation)
     std::vector<Interpolated> finer_only;  // the finer level's particles not on this level
   };
   std::vector<Level> levels_;  // levels_[0] = level 1 (the finest coarse level)

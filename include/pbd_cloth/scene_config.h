@@ -85,6 +85,9 @@ struct SolverConfig {
   // node), that step is undone: Simulation::step, "Faults". Nothing a robot handles moves a cloth
   // at 100 m/s; a gripper jumping 1 m in one 60 Hz step drags its neighbours at about 60 m/s.
   double max_speed = 100.0;
+  // solver.simd: project the stretch links four at a time with AVX2 where the processor has it
+  // (stretch_links.h; bit-identical to the portable loop). false: always the portable loop.
+  bool simd = true;
 };
 
 struct FrictionConfig {

@@ -9,6 +9,7 @@
 #include "pbd_cloth/collisions.h"
 #include "pbd_cloth/particles.h"
 #include "pbd_cloth/scene_config.h"
+#include "pbd_cloth/stretch_links.h"
 
 namespace pbd_cloth {
 
@@ -72,6 +73,7 @@ class Solver {
   void massSpringSubstep(double h, double s_end, Particles& p, const ClothTopology& topology,
                          Collisions& collisions);
   double pbdStiffness(double k) const;
+  double stretchAlpha(double h) const;
   double dampingFactor(double h) const;
   void countJacobiConstraints(const Particles& p, const ClothTopology& topology);
   void startReactions(const Particles& p, const ClothTopology& topology);
@@ -85,6 +87,7 @@ class Solver {
   double spacing_ = 0.0;                // cloth.spacing: the rest geometry of the coarse levels
   CoarseLevels coarse_;                 // solver.levels; empty when off or the cloth is a mesh
   std::vector<double> stretch_lambda_;  // XPBD multipliers, reset every substep
+  StretchLinks stretch_links_;          // topology.stretch in flat arrays and batches (prepare)
   Vec3Array bend_lambda_;               // one vector per hinge: C = scale b is vector-valued
   Vec3Array jacobi_delta_;              // Jacobi: summed corrections per particle
   std::vector<int> jacobi_count_;  // Jacobi: stretch and bend constraints on each free particle

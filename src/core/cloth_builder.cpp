@@ -69,15 +69,26 @@ void addStretch(const ClothConfig& cloth, const Vec3Array& x, ClothTopology& top
   // Both diagonals (cloth.shear_diagonals: 2, the link set of Bullet's and Bender's cloth, and of
   // the issue 12 benchmark) make every cell a rigid planar frame: an inextensible cloth then folds
   // only along the grid lines between cells. Cells two apart share no particle: even cells of a
-  // row, then odd ones; a cell's two diagonals share none either.
+  // row, then odd ones.
+  // With both, every main diagonal of a row (cells next to each other share none), then every
+  // anti-diagonal: runs whose particle indices step by one, four of which the projection loads as
+  // whole registers (stretch_links.h); one diagonal per cell steps by two, as even and odd cells.
   const bool both = cloth.shear_diagonals == 2;
   for (int r = 0; r + 1 < rows; ++r) {
+    if (both) {
+      for (int c = 0; c + 1 < cols; ++c) add(r * cols + c, r * cols + c + cols + 1);
+      for (int c = 0; c + 1 < cols; ++c) add(r * cols + c + 1, r * cols + c + cols);
+      continue;
+    }
     for (int parity = 0; parity < 2; ++parity) {
       for (int c = parity; c + 1 < cols; c += 2) {
         const int i = r * cols + c;
         const bool main_diagonal = (r + c) % 2 == 0;  // the triangles' shared edge is a-e
-        if (main_diagonal || both) add(i, i + cols + 1);
-        if (!main_diagonal || both) add(i + 1, i + cols);
+        if (main_diagonal) {
+          add(i, i + cols + 1);
+        } else {
+          add(i + 1, i + cols);
+        }
       }
     }
   }

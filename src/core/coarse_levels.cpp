@@ -125,6 +125,10 @@ void CoarseLevels::build(int rows, int cols, double spacing, int levels) {
         level.finer_only.push_back(f);
       }
     }
+    std::vector<DistanceConstraint> flat;
+    flat.reserve(level.links.size());
+    for (const Link& link : level.links) flat.push_back({link.i, link.j, link.rest_length});
+    level.flat.assign(flat, rows * cols);
     largest = std::max(largest, level.particles.size());
     finer_carried = level.carried;
     for (std::size_t q = 0; q < level.particles.size(); ++q) {
@@ -138,7 +142,11 @@ void CoarseLevels::build(int rows, int cols, double spacing, int levels) {
   displacement_.assign(largest, Vec3::Zero());
 }
 
-double CoarseLevels::project(Particles& p, bool interpolate) {
+void CoarseLevels::prepareStep(const Particles& p) {
+  for (Level& level : levels_) level.flat.prepareStep(p.inverse_mass.data(), 0.0);
+}
+
+double CoarseLevels::project(Particles& p, bool interpolate, bool simd) {
   if (levels_.empty()) return 0.0;
   if (interpolate) {
     for (int i : levels_.front().particles) start_[i] = p.position[i];
@@ -146,6 +154,17 @@ double CoarseLevels::project(Particles& p, bool interpolate) {
   double max_change = 0.0;
   for (int k = static_cast<int>(levels_.size()) - 1; k >= 0; --k) {
     const Level& level = levels_[k];
+    if (!interpolate) {
+      // Each end moves itself: the cloth's own projection (stretch_links.h) with C = max(0, C),
+      // k = 1, no compliance and no multiplier.
+      StretchProjection how;
+      how.unilateral = true;
+      how.simd = simd;
+      max_change = std::max(max_change, projectStretchLinks(level.flat, 0, level.flat.batchCount(),
+                                                            how, p.position.front().data(), nullptr)
+                                            .max_change);
+      continue;
+    }
     // Unilateral: a coarse link only pulls its ends together, never pushes them apart.
     for (const Link& link : level.links) {
       // Interpolated, an end moves the cloth it carries; alone, it moves itself.

@@ -20,6 +20,8 @@ constexpr double kMinInverseMass = 1e-300;
 // A tether counts as satisfied up to this relative excess: the rounding of a projection onto its
 // own sphere, so a satisfied tether is not projected again and again.
 constexpr double kTetherSlack = 1e-14;
+// The stretch links read positions as one flat array x0 y0 z0 x1 ... (stretch_links.h).
+static_assert(sizeof(Vec3) == 3 * sizeof(double), "Vec3Array must be densely packed");
 
 // The mean-curvature vector b = sum_k K_k x_k of a hinge, computed as sum_{k>0} K_k (x_k - x_0)
 // (the weights sum to zero): the same value, without the cancellation of large coordinates that
@@ -71,6 +73,7 @@ void Solver::configure(const SolverConfig& solver, const ClothConfig& cloth) {
 void Solver::prepare(const Particles& particles, const ClothTopology& topology) {
   const int n = particles.size();
   stretch_lambda_.assign(topology.stretch.size(), 0.0);
+  stretch_links_.assign(topology.stretch, n);
   bend_lambda_.assign(topology.bend.size(), Vec3::Zero());
   jacobi_delta_.assign(n, Vec3::Zero());
   jacobi_count_.assign(n, 0);
@@ -99,6 +102,11 @@ void Solver::initializeVelocities(Particles& particles, double dt) const {
   for (int i = 0; i < particles.size(); ++i) {
     if (!particles.isKinematic(i)) particles.velocity[i] -= 0.5 * h * config_.gravity;
   }
+}
+
+// alpha~ = alpha / h^2 of the stretch constraints (XPBD eq. 18); PBD and Verlet have none.
+double Solver::stretchAlpha(double h) const {
+  return config_.method == Method::kXpbd ? stretch_compliance_ / (h * h) : 0.0;
 }
 
 double Solver::pbdStiffness(double k) const {
@@ -154,10 +162,25 @@ double Solver::projectStretch(double h, Particles& p, const ClothTopology& topol
   const bool xpbd = config_.method == Method::kXpbd;
   const bool jacobi = config_.ordering == Ordering::kJacobi;
   const bool average = jacobi && config_.jacobi_averaging;
-  const double alpha = xpbd ? stretch_compliance_ / (h * h) : 0.0;
+  const double alpha = stretchAlpha(h);
   const double k = config_.method == Method::kPbd ? pbdStiffness(config_.stretch_stiffness) : 1.0;
-  double max_change = 0.0;
   const int count = static_cast<int>(topology.stretch.size());
+  if (!jacobi && count > 0 && stretch_links_.size() == count) {
+    // Gauss-Seidel: the flat, batched links (stretch_links.h), the same sweep in the same order.
+    StretchProjection how;
+    how.alpha = alpha;
+    how.stiffness = k;
+    how.simd = config_.simd;
+    const StretchPassResult result =
+        projectStretchLinks(stretch_links_, 0, stretch_links_.batchCount(), how,
+                            p.position.front().data(), stretch_lambda_.data());
+    if (result.degenerate > 0) {
+      if (degenerate_in_pass_ == 0) first_degenerate_in_pass_ = result.first_degenerate;
+      degenerate_in_pass_ += result.degenerate;
+    }
+    return result.max_change;
+  }
+  double max_change = 0.0;
   for (int c = 0; c < count; ++c) {
     const DistanceConstraint& con = topology.stretch[c];
     const double wi = p.inverse_mass[con.i], wj = p.inverse_mass[con.j];
@@ -419,7 +442,7 @@ double Solver::projectPass(double h, Particles& p, const ClothTopology& topology
   // compliant (they are inextensible); the explicit springs do not come here.
   double max_change = 0.0;
   if (coarse_.levelCount() > 0 && stretch_compliance_ == 0.0) {
-    max_change = coarse_.project(p, config_.levels_interpolate);
+    max_change = coarse_.project(p, config_.levels_interpolate, config_.simd);
   }
   max_change = std::max(max_change, projectStretch(h, p, topology));
   max_change = std::max(max_change, projectBend(h, p, topology));
@@ -591,6 +614,12 @@ void Solver::step(double dt, Particles& p, const ClothTopology& topology, Collis
   p.step_start = p.position;
   if (config_.ordering == Ordering::kJacobi) countJacobiConstraints(p, topology);
   startReactions(p, topology);
+  // The kinematic set and h are fixed for the step: each link's 1 / (w_i + w_j + alpha~) once.
+  if (config_.method != Method::kMassSpring && stretch_links_.size() > 0 &&
+      stretch_links_.size() == static_cast<int>(topology.stretch.size())) {
+    stretch_links_.prepareStep(p.inverse_mass.data(), stretchAlpha(h));
+  }
+  coarse_.prepareStep(p);
 
   // Find contacts at the step start; every substep enforces them (Jolt's "collide" phase).
   // Collisions::project searches again in a substep whose prediction left the swept boxes.

@@ -213,11 +213,12 @@ YAML::Node listOf(const MapReader& map, const std::string& name, const char* exp
 // --- Sections ------------------------------------------------------------------------------------
 
 void readSolver(const YAML::Node& node, SolverConfig& s) {
-  const MapReader map(node, "solver",
-                      {"method", "substeps", "iterations", "tolerance", "ordering", "relaxation",
-                       "jacobi_averaging", "gravity", "damping", "stretch_stiffness",
-                       "bend_stiffness", "spring_stiffness", "spring_damping",
-                       "bend_spring_stiffness", "levels", "levels_interpolate", "max_speed"});
+  const MapReader map(
+      node, "solver",
+      {"method", "substeps", "iterations", "tolerance", "ordering", "relaxation",
+       "jacobi_averaging", "gravity", "damping", "stretch_stiffness", "bend_stiffness",
+       "spring_stiffness", "spring_damping", "bend_spring_stiffness", "levels",
+       "levels_interpolate", "max_speed", "simd"});
   if (map.has("method")) {
     s.method = toWord(map.get("method"), map.keyOf("method"),
                       {Method::kXpbd, Method::kPbd, Method::kVerlet, Method::kMassSpring});
@@ -241,6 +242,7 @@ void readSolver(const YAML::Node& node, SolverConfig& s) {
   map.read("levels", s.levels);
   map.read("levels_interpolate", s.levels_interpolate);
   map.read("max_speed", s.max_speed);
+  map.read("simd", s.simd);
 }
 
 void readCloth(const YAML::Node& node, ClothConfig& c) {

@@ -29,6 +29,7 @@
 #include "pbd_cloth/scene_yaml.h"
 #include "pbd_cloth/simulation.h"
 #include "pbd_cloth/solver.h"
+#include "pbd_cloth/stretch_links.h"
 
 namespace pbd_cloth {
 namespace {
@@ -123,6 +124,91 @@ void BM_StretchProjection(benchmark::State& state) {
   setCounters(state, static_cast<double>(rig.topology.stretch.size()), total, projections);
   state.SetLabel(std::string(toString(scene.solver.method)) + " " +
                  toString(scene.solver.ordering) + ": per stretch projection");
+}
+
+// The stretch pair of issue 12 (target 5): one Gauss-Seidel pass over the links of the swinging
+// cloth (config/swinging.yaml built in code: 50 x 50, both diagonals, 9702 links) through the
+// solver's own projection (projectStretchLinks, arg simd = 1: AVX2 where there, 0: the portable
+// loop), against BM_StretchBareLoop: a bare loop doing the same XPBD arithmetic on the same flat
+// arrays, with none of the checks (kinematic ends, coincident particles, largest correction).
+struct StretchRig {
+  StretchRig() {
+    SceneConfig scene = clothScene(Method::kXpbd, 1, false);
+    scene.cloth.shear_diagonals = 2;
+    scene.cloth.rpy = Eigen::Vector3d::Zero();  // flat, swinging down as config/swinging.yaml
+    scene.solver.substeps = 20;
+    SolverRig rig(scene);
+    for (int step = 0; step < 30; ++step) rig.timedStep();  // a swinging, stretched state
+    links.assign(rig.topology.stretch, rig.particles.size());
+    position = rig.particles.position;
+    inverse_mass = rig.particles.inverse_mass;
+    lambda.assign(links.size(), 0.0);
+  }
+  double* x() { return position.front().data(); }
+  StretchLinks links;
+  Vec3Array position;
+  std::vector<double> inverse_mass;
+  std::vector<double> lambda;
+};
+
+void BM_StretchLinks(benchmark::State& state) {
+  StretchRig rig;
+  StretchProjection how;
+  how.alpha = 1e-9;  // a compliance, so the multiplier term is computed as in XPBD
+  how.simd = state.range(0) != 0;
+  rig.links.prepareStep(rig.inverse_mass.data(), how.alpha);
+  double total = 0.0;
+  for (auto _ : state) {
+    const Clock::time_point start = Clock::now();
+    benchmark::DoNotOptimize(
+        projectStretchLinks(rig.links, 0, rig.links.batchCount(), how, rig.x(), rig.lambda.data()));
+    benchmark::ClobberMemory();
+    total += secondsSince(start);
+  }
+  setCounters(state, rig.links.size(), total, rig.links.size());
+  state.SetLabel(how.simd && stretchLinksUseAvx2() ? "projectStretchLinks, AVX2"
+                                                   : "projectStretchLinks, portable");
+}
+
+// The same arithmetic, in the same order, on the same arrays (the link list, the per-step inverse
+// masses and denominators, the positions and multipliers), with nothing else.
+void BM_StretchBareLoop(benchmark::State& state) {
+  StretchRig rig;
+  const double alpha = 1e-9;
+  rig.links.prepareStep(rig.inverse_mass.data(), alpha);
+  const int count = rig.links.size();
+  const int* link_i = rig.links.i.data();
+  const int* link_j = rig.links.j.data();
+  const double* rest = rig.links.rest_length.data();
+  const double* wi = rig.links.inverse_mass_i.data();
+  const double* wj = rig.links.inverse_mass_j.data();
+  const double* inverse_denominator = rig.links.inverse_denominator.data();
+  double* lambda = rig.lambda.data();
+  double* x = rig.x();
+  double total = 0.0;
+  for (auto _ : state) {
+    const Clock::time_point start = Clock::now();
+    for (int c = 0; c < count; ++c) {
+      double* xa = x + 3 * link_i[c];
+      double* xb = x + 3 * link_j[c];
+      const double dx = xa[0] - xb[0], dy = xa[1] - xb[1], dz = xa[2] - xb[2];
+      const double length = std::sqrt((dx * dx + dy * dy) + dz * dz);
+      const double dlambda = (-(length - rest[c]) - alpha * lambda[c]) * inverse_denominator[c];
+      lambda[c] += dlambda;
+      const double s = dlambda / length;
+      const double fa = wi[c] * s, fb = wj[c] * s;
+      xa[0] += fa * dx;
+      xa[1] += fa * dy;
+      xa[2] += fa * dz;
+      xb[0] -= fb * dx;
+      xb[1] -= fb * dy;
+      xb[2] -= fb * dz;
+    }
+    benchmark::ClobberMemory();
+    total += secondsSince(start);
+  }
+  setCounters(state, count, total, count);
+  state.SetLabel("bare loop, same arithmetic");
 }
 
 // ns per bending projection: a step with hinges minus the same step without, per hinge and pass.
@@ -474,6 +560,8 @@ BENCHMARK(BM_StretchProjection)
     ->Args({kXpbd, kJacobi, 50})
     ->UseManualTime()
     ->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_StretchLinks)->ArgName("simd")->Arg(1)->Arg(0)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_StretchBareLoop)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_BendProjection)
     ->ArgNames({"method", "passes"})
     ->Args({kXpbd, 10})

@@ -1,0 +1,98 @@
+// Distance links in flat arrays, grouped in batches of links that share no particle, and the one
+// projection every stretch-like link of the solver goes through: the cloth's stretch constraints
+// (seed eq. C2; XPBD eq. 18) and the coarse levels' unilateral long-range links.
+//
+// Why batches: inside a batch no two links touch the same particle, so projecting them one after
+// the other (Gauss-Seidel) gives exactly what projecting them all at once from the same positions
+// gives. That lets four links go through one AVX2 register (the square root and the division, the
+// costly part, at once), and lets threads split a batch (solver.threads), with results that do not
+// depend on either: the order of the links is the order of the list, whatever runs it.
+//
+// Runtime dispatch: the AVX2 path is compiled for that instruction set only (a function target
+// attribute) and chosen at run time when the processor has it; any other x86-64 (a lab's older
+// PC) or another architecture runs the portable loop. The source file is compiled without
+// floating-point contraction, so both paths round the same operations the same way and give
+// bit-identical results (test_core: StretchLinks.*).
+#pragma once
+
+#include <vector>
+
+#include "pbd_cloth/particles.h"
+
+namespace pbd_cloth {
+
+struct StretchLinks {
+  std::vector<int> i;  // particle indices of each link
+  std::vector<int> j;
+  std::vector<double> rest_length;  // m
+  // Batch b holds links [batch_begin[b], batch_begin[b + 1]); no two of them share a particle.
+  std::vector<int> batch_begin;
+
+  // How a run of links is laid out in memory, found once in assign(). A grid's batches are rows
+  // of links whose ends step through the particles regularly; four such links are loaded and
+  // stored as whole registers (three per four particles), without gathers. kScalar: one link at a
+  // time (a mesh's links, the ends of a batch, a group with a coincident pair).
+  enum class Layout : int {
+    kScalar,       // [begin, end): any links, projected one by one
+    kContiguous,   // 4 links: i = i0 + k, j = j0 + k (vertical and diagonal grid links)
+    kInterleaved,  // 4 links: i = i0 + 2k, j = i0 + 2k + 1 (horizontal links of one parity)
+    kStrided,      // 4 links: i = i0 + 2k, j = j0 + 2k (the single diagonal of every other cell)
+  };
+  struct Segment {
+    int begin = 0;
+    int end = 0;
+    Layout layout = Layout::kScalar;
+  };
+  std::vector<Segment> segments;   // in list order; a segment never spans two batches
+  std::vector<int> batch_segment;  // batch b's segments: [batch_segment[b], batch_segment[b+1])
+
+  // Per step (prepareStep): each link's end inverse masses and 1 / (w_i + w_j + alpha~), zero
+  // for a link with no free end. The kinematic set and h are fixed within a step, so the
+  // projection divides once per link (by its length), not twice.
+  std::vector<double> inverse_mass_i;
+  std::vector<double> inverse_mass_j;
+  std::vector<double> inverse_denominator;
+
+  int size() const { return static_cast<int>(i.size()); }
+  int batchCount() const { return static_cast<int>(batch_begin.size()) - 1; }
+  // Copies the links in their order and cuts it into batches: each batch is the longest run from
+  // where the last one ended in which no particle repeats (the list's order is kept, so the sweep
+  // is the Gauss-Seidel sweep the builder laid out); then finds each batch's register layouts.
+  void assign(const std::vector<DistanceConstraint>& links, int particle_count);
+  void clear();
+  // Before the projections of a step: alpha~ = compliance / h^2 of its substeps (0 for PBD).
+  void prepareStep(const double* inverse_mass, double alpha);
+
+ private:
+  void findSegments(int particle_count);
+};
+
+// How a call projects its links. Stretch constraint: C = |x_i - x_j| - l0, multiplier step
+// dlambda = (-k C - alpha~ lambda) / (w_i + w_j + alpha~): XPBD with k = 1 and alpha~ = compliance
+// / h^2 (eq. 18), PBD with alpha~ = 0 and k its pass stiffness, the seed's rigid stick with both.
+// Unilateral links (the coarse levels) use C = max(0, |x_i - x_j| - l0): they only pull.
+struct StretchProjection {
+  double alpha = 0.0;      // alpha~ = compliance / h^2, as given to prepareStep
+  double stiffness = 1.0;  // k
+  bool unilateral = false;
+  bool simd = true;  // false: the portable loop even where AVX2 is there (tests, benchmarks)
+};
+
+struct StretchPassResult {
+  double max_change = 0.0;  // largest |dlambda| max(w_i, w_j): the largest particle move (m)
+  int degenerate = 0;       // links skipped because their particles coincide (no direction)
+  int first_degenerate = -1;
+};
+
+// Projects the links of batches [first_batch, end_batch) in order, after links.prepareStep:
+// position is the particles' positions as x0 y0 z0 x1 ... (Vec3Array's storage), lambda one
+// multiplier per link (accumulated; nullptr: links without a multiplier, taken as zero, e.g. the
+// unilateral coarse links). Links with no free particle are skipped. Allocates nothing.
+StretchPassResult projectStretchLinks(const StretchLinks& links, int first_batch, int end_batch,
+                                      const StretchProjection& how, double* position,
+                                      double* lambda);
+
+// Whether projectStretchLinks takes the AVX2 path on this processor (with how.simd).
+bool stretchLinksUseAvx2();
+
+}  // namespace pbd_cloth

@@ -1,0 +1,340 @@
+#include "pbd_cloth/stretch_links.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+
+#if defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>
+#define PBD_CLOTH_HAVE_AVX2_PATH 1
+#endif
+
+namespace pbd_cloth {
+
+namespace {
+
+// Below this length a link has no direction: skipped and reported (coincident particles).
+constexpr double kMinLength = 1e-12;
+// Below this a link's generalized inverse mass is zero (both ends kinematic): skipped.
+constexpr double kMinInverseMass = 1e-300;
+
+// One link, in the exact operation order of the AVX2 lanes below (same roundings, so the paths
+// agree to the bit): d = x_i - x_j, C = |d| - l0 (or max(0, C)), dlambda = (-k C - alpha~ lambda)
+// / (w_i + w_j + alpha~) (XPBD eq. 18, the division done once per step in prepareStep), and each
+// end moves by its inverse mass times dlambda along the unit gradient n = d / |d|.
+inline void projectOne(int c, const StretchLinks& links, const StretchProjection& how, double* x,
+                       double* lambda, StretchPassResult& result) {
+  const double inverse_denominator = links.inverse_denominator[c];
+  if (inverse_denominator == 0.0) return;  // no free end
+  double* xa = x + 3 * links.i[c];
+  double* xb = x + 3 * links.j[c];
+  const double dx = xa[0] - xb[0], dy = xa[1] - xb[1], dz = xa[2] - xb[2];
+  const double length = std::sqrt((dx * dx + dy * dy) + dz * dz);
+  if (length < kMinLength) {
+    // No direction to push along: skipped this pass (the other links pull them apart), counted.
+    if (result.degenerate++ == 0) result.first_degenerate = c;
+    return;
+  }
+  double constraint = length - links.rest_length[c];
+  if (how.unilateral) constraint = std::max(0.0, constraint);
+  const double old_lambda = lambda != nullptr ? lambda[c] : 0.0;
+  const double dlambda =
+      (-how.stiffness * constraint - how.alpha * old_lambda) * inverse_denominator;
+  if (lambda != nullptr) lambda[c] = old_lambda + dlambda;
+  const double s = dlambda / length;
+  const double wi = links.inverse_mass_i[c], wj = links.inverse_mass_j[c];
+  const double fa = wi * s, fb = wj * s;
+  xa[0] += fa * dx;
+  xa[1] += fa * dy;
+  xa[2] += fa * dz;
+  xb[0] -= fb * dx;
+  xb[1] -= fb * dy;
+  xb[2] -= fb * dz;
+  result.max_change = std::max(result.max_change, std::abs(dlambda) * std::max(wi, wj));
+}
+
+void projectPortable(const StretchLinks& links, int first_batch, int end_batch,
+                     const StretchProjection& how, double* x, double* lambda,
+                     StretchPassResult& result) {
+  const int begin = links.batch_begin[first_batch], end = links.batch_begin[end_batch];
+  for (int c = begin; c < end; ++c) projectOne(c, links, how, x, lambda, result);
+}
+
+#ifdef PBD_CLOTH_HAVE_AVX2_PATH
+#define PBD_AVX2 __attribute__((target("avx2")))
+
+// Four particles' coordinates (12 doubles from p, x0 y0 z0 x1 y1 ...) as three registers x, y, z
+// (three loads and six shuffles), and back.
+PBD_AVX2 inline void loadFour(const double* p, __m256d& x, __m256d& y, __m256d& z) {
+  const __m256d a = _mm256_loadu_pd(p);      // x0 y0 z0 x1
+  const __m256d b = _mm256_loadu_pd(p + 4);  // y1 z1 x2 y2
+  const __m256d c = _mm256_loadu_pd(p + 8);  // z2 x3 y3 z3
+  const __m256d z0x1z2x3 = _mm256_permute2f128_pd(a, c, 0x21);
+  const __m256d x0y0x2y2 = _mm256_blend_pd(a, b, 0xC);
+  const __m256d y1z1y3z3 = _mm256_blend_pd(b, c, 0xC);
+  x = _mm256_shuffle_pd(x0y0x2y2, z0x1z2x3, 0xA);
+  y = _mm256_shuffle_pd(x0y0x2y2, y1z1y3z3, 0x5);
+  z = _mm256_shuffle_pd(z0x1z2x3, y1z1y3z3, 0xA);
+}
+
+PBD_AVX2 inline void storeFour(double* p, __m256d x, __m256d y, __m256d z) {
+  const __m256d x0y0x2y2 = _mm256_shuffle_pd(x, y, 0x0);
+  const __m256d z0x1z2x3 = _mm256_shuffle_pd(z, x, 0xA);
+  const __m256d y1z1y3z3 = _mm256_shuffle_pd(y, z, 0xF);
+  _mm256_storeu_pd(p, _mm256_permute2f128_pd(x0y0x2y2, z0x1z2x3, 0x20));
+  _mm256_storeu_pd(p + 4, _mm256_blend_pd(y1z1y3z3, x0y0x2y2, 0xC));
+  _mm256_storeu_pd(p + 8, _mm256_permute2f128_pd(z0x1z2x3, y1z1y3z3, 0x31));
+}
+
+// One coordinate of eight consecutive particles (two registers of four) split into the even ones
+// (0 2 4 6) and the odd ones (1 3 5 7), and joined again.
+PBD_AVX2 inline void splitEvenOdd(__m256d low, __m256d high, __m256d& even, __m256d& odd) {
+  even = _mm256_permute4x64_pd(_mm256_unpacklo_pd(low, high), 0xD8);
+  odd = _mm256_permute4x64_pd(_mm256_unpackhi_pd(low, high), 0xD8);
+}
+
+PBD_AVX2 inline void joinEvenOdd(__m256d even, __m256d odd, __m256d& low, __m256d& high) {
+  const __m256d e0o0e2o2 = _mm256_unpacklo_pd(even, odd);
+  const __m256d e1o1e3o3 = _mm256_unpackhi_pd(even, odd);
+  low = _mm256_permute2f128_pd(e0o0e2o2, e1o1e3o3, 0x20);
+  high = _mm256_permute2f128_pd(e0o0e2o2, e1o1e3o3, 0x31);
+}
+
+// Eight particles from p: the even ones and the odd ones, as x, y, z registers each.
+struct EightParticles {
+  __m256d even[3];
+  __m256d odd[3];
+};
+
+PBD_AVX2 inline void loadEight(const double* p, EightParticles& e) {
+  __m256d low[3], high[3];
+  loadFour(p, low[0], low[1], low[2]);
+  loadFour(p + 12, high[0], high[1], high[2]);
+  for (int d = 0; d < 3; ++d) splitEvenOdd(low[d], high[d], e.even[d], e.odd[d]);
+}
+
+PBD_AVX2 inline void storeEight(double* p, const EightParticles& e) {
+  __m256d low[3], high[3];
+  for (int d = 0; d < 3; ++d) joinEvenOdd(e.even[d], e.odd[d], low[d], high[d]);
+  storeFour(p, low[0], low[1], low[2]);
+  storeFour(p + 12, high[0], high[1], high[2]);
+}
+
+// The arithmetic of projectOne on four links at once: a = their i ends, b = their j ends (x, y,
+// z registers, updated in place). Returns false, touching nothing, when a link of the four has
+// coincident ends (projectOne then reports it).
+PBD_AVX2 inline bool projectFour(int c, const StretchLinks& links, const StretchProjection& how,
+                                 double* lambda, __m256d* a, __m256d* b, __m256d& max_change) {
+  const __m256d dx = _mm256_sub_pd(a[0], b[0]);
+  const __m256d dy = _mm256_sub_pd(a[1], b[1]);
+  const __m256d dz = _mm256_sub_pd(a[2], b[2]);
+  const __m256d length = _mm256_sqrt_pd(_mm256_add_pd(
+      _mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)), _mm256_mul_pd(dz, dz)));
+  const __m256d long_enough = _mm256_cmp_pd(length, _mm256_set1_pd(kMinLength), _CMP_GE_OQ);
+  if (_mm256_movemask_pd(long_enough) != 0xF) return false;
+  const __m256d zero = _mm256_setzero_pd();
+  __m256d constraint = _mm256_sub_pd(length, _mm256_loadu_pd(&links.rest_length[c]));
+  if (how.unilateral) constraint = _mm256_max_pd(zero, constraint);
+  const __m256d old_lambda = lambda != nullptr ? _mm256_loadu_pd(&lambda[c]) : zero;
+  const __m256d dlambda =
+      _mm256_mul_pd(_mm256_sub_pd(_mm256_mul_pd(_mm256_set1_pd(-how.stiffness), constraint),
+                                  _mm256_mul_pd(_mm256_set1_pd(how.alpha), old_lambda)),
+                    _mm256_loadu_pd(&links.inverse_denominator[c]));
+  if (lambda != nullptr) _mm256_storeu_pd(&lambda[c], _mm256_add_pd(old_lambda, dlambda));
+  const __m256d s = _mm256_div_pd(dlambda, length);
+  const __m256d wi = _mm256_loadu_pd(&links.inverse_mass_i[c]);
+  const __m256d wj = _mm256_loadu_pd(&links.inverse_mass_j[c]);
+  const __m256d fa = _mm256_mul_pd(wi, s), fb = _mm256_mul_pd(wj, s);
+  const __m256d d[3] = {dx, dy, dz};
+  for (int k = 0; k < 3; ++k) {
+    a[k] = _mm256_add_pd(a[k], _mm256_mul_pd(fa, d[k]));
+    b[k] = _mm256_sub_pd(b[k], _mm256_mul_pd(fb, d[k]));
+  }
+  // A skipped link (no free end) has inverse_denominator 0: dlambda 0, nothing moves.
+  const __m256d magnitude = _mm256_andnot_pd(_mm256_set1_pd(-0.0), dlambda);
+  max_change = _mm256_max_pd(max_change, _mm256_mul_pd(magnitude, _mm256_max_pd(wi, wj)));
+  return true;
+}
+
+PBD_AVX2 void projectAvx2(const StretchLinks& links, int first_batch, int end_batch,
+                          const StretchProjection& how, double* x, double* lambda,
+                          StretchPassResult& result) {
+  __m256d max_change = _mm256_setzero_pd();
+  const int first = links.batch_segment[first_batch], last = links.batch_segment[end_batch];
+  for (int g = first; g < last; ++g) {
+    const StretchLinks::Segment& segment = links.segments[g];
+    const int c = segment.begin;
+    double* pa = x + 3 * links.i[c];
+    double* pb = x + 3 * links.j[c];
+    bool done = true;
+    switch (segment.layout) {
+      case StretchLinks::Layout::kScalar:
+        for (int k = segment.begin; k < segment.end; ++k) {
+          projectOne(k, links, how, x, lambda, result);
+        }
+        break;
+      case StretchLinks::Layout::kContiguous: {
+        __m256d a[3], b[3];
+        loadFour(pa, a[0], a[1], a[2]);
+        loadFour(pb, b[0], b[1], b[2]);
+        done = projectFour(c, links, how, lambda, a, b, max_change);
+        if (done) {
+          storeFour(pa, a[0], a[1], a[2]);
+          storeFour(pb, b[0], b[1], b[2]);
+        }
+        break;
+      }
+      case StretchLinks::Layout::kInterleaved: {
+        EightParticles e;
+        loadEight(pa, e);
+        done = projectFour(c, links, how, lambda, e.even, e.odd, max_change);
+        if (done) storeEight(pa, e);
+        break;
+      }
+      case StretchLinks::Layout::kStrided: {
+        EightParticles ea, eb;
+        loadEight(pa, ea);
+        loadEight(pb, eb);
+        done = projectFour(c, links, how, lambda, ea.even, eb.even, max_change);
+        if (done) {
+          storeEight(pa, ea);
+          storeEight(pb, eb);
+        }
+        break;
+      }
+    }
+    if (!done) {
+      for (int k = segment.begin; k < segment.end; ++k) {
+        projectOne(k, links, how, x, lambda, result);
+      }
+    }
+  }
+  alignas(32) double lanes[4];
+  _mm256_store_pd(lanes, max_change);
+  for (double lane : lanes) result.max_change = std::max(result.max_change, lane);
+}
+#endif
+
+}  // namespace
+
+void StretchLinks::clear() {
+  i.clear();
+  j.clear();
+  rest_length.clear();
+  batch_begin.assign(1, 0);
+  segments.clear();
+  batch_segment.assign(1, 0);
+  inverse_mass_i.clear();
+  inverse_mass_j.clear();
+  inverse_denominator.clear();
+}
+
+void StretchLinks::assign(const std::vector<DistanceConstraint>& links, int particle_count) {
+  clear();
+  const int count = static_cast<int>(links.size());
+  i.reserve(count);
+  j.reserve(count);
+  rest_length.reserve(count);
+  // batch_of[p]: the batch that last touched particle p (-1: none yet).
+  std::vector<int> batch_of(std::max(particle_count, 0), -1);
+  auto inside = [particle_count](int p) { return p >= 0 && p < particle_count; };
+  int current = 0;
+  for (int c = 0; c < count; ++c) {
+    const DistanceConstraint& link = links[c];
+    i.push_back(link.i);
+    j.push_back(link.j);
+    rest_length.push_back(link.rest_length);
+    const bool shares = !inside(link.i) || !inside(link.j) || batch_of[link.i] == current ||
+                        batch_of[link.j] == current;
+    if (c > 0 && shares) {  // this link starts the next batch
+      batch_begin.push_back(c);
+      ++current;
+    }
+    if (inside(link.i)) batch_of[link.i] = current;
+    if (inside(link.j)) batch_of[link.j] = current;
+  }
+  batch_begin.push_back(count);
+  inverse_mass_i.assign(count, 0.0);
+  inverse_mass_j.assign(count, 0.0);
+  inverse_denominator.assign(count, 0.0);
+  findSegments(particle_count);
+}
+
+// The register layout of four links from c, if they have one: the particles each register
+// touches (4 or 8 from i0, 4 or 8 from j0) must lie inside the particles, and the two windows
+// must not overlap (or be the same window, interleaved).
+void StretchLinks::findSegments(int particle_count) {
+  auto layoutAt = [&](int c) {
+    const int i0 = i[c], j0 = j[c];
+    bool contiguous = true, strided = true, interleaved = true;
+    for (int k = 1; k < 4; ++k) {
+      contiguous = contiguous && i[c + k] == i0 + k && j[c + k] == j0 + k;
+      strided = strided && i[c + k] == i0 + 2 * k && j[c + k] == j0 + 2 * k;
+    }
+    interleaved = strided && j0 == i0 + 1;
+    const int gap = std::abs(j0 - i0);
+    auto fits = [&](int width) {
+      return i0 >= 0 && j0 >= 0 && i0 + width <= particle_count && j0 + width <= particle_count;
+    };
+    if (contiguous && gap >= 4 && fits(4)) return Layout::kContiguous;
+    if (interleaved && fits(8)) return Layout::kInterleaved;
+    if (strided && gap >= 8 && fits(8)) return Layout::kStrided;
+    return Layout::kScalar;
+  };
+  for (int b = 0; b < batchCount(); ++b) {
+    const int end = batch_begin[b + 1];
+    int c = batch_begin[b];
+    while (c < end) {
+      const Layout layout = c + 4 <= end ? layoutAt(c) : Layout::kScalar;
+      if (layout != Layout::kScalar) {
+        segments.push_back({c, c + 4, layout});
+        c += 4;
+      } else if (!segments.empty() && segments.back().layout == Layout::kScalar &&
+                 segments.back().end == c &&
+                 static_cast<int>(segments.size()) > batch_segment.back()) {
+        ++segments.back().end;  // extends this batch's open scalar segment
+        ++c;
+      } else {
+        segments.push_back({c, c + 1, Layout::kScalar});
+        ++c;
+      }
+    }
+    batch_segment.push_back(static_cast<int>(segments.size()));
+  }
+}
+
+void StretchLinks::prepareStep(const double* inverse_mass, double alpha) {
+  const int count = size();
+  for (int c = 0; c < count; ++c) {
+    const double wi = inverse_mass[i[c]], wj = inverse_mass[j[c]];
+    inverse_mass_i[c] = wi;
+    inverse_mass_j[c] = wj;
+    inverse_denominator[c] = wi + wj < kMinInverseMass ? 0.0 : 1.0 / (wi + wj + alpha);
+  }
+}
+
+bool stretchLinksUseAvx2() {
+#ifdef PBD_CLOTH_HAVE_AVX2_PATH
+  static const bool has_avx2 = __builtin_cpu_supports("avx2");
+  return has_avx2;
+#else
+  return false;
+#endif
+}
+
+StretchPassResult projectStretchLinks(const StretchLinks& links, int first_batch, int end_batch,
+                                      const StretchProjection& how, double* position,
+                                      double* lambda) {
+  StretchPassResult result;
+  if (first_batch >= end_batch) return result;
+#ifdef PBD_CLOTH_HAVE_AVX2_PATH
+  if (how.simd && stretchLinksUseAvx2()) {
+    projectAvx2(links, first_batch, end_batch, how, position, lambda, result);
+    return result;
+  }
+#endif
+  projectPortable(links, first_batch, end_batch, how, position, lambda, result);
+  return result;
+}
+
+}  // namespace pbd_cloth

@@ -1,0 +1,157 @@
+// The stretch links' flat, batched projection (stretch_links.h): batches share no particle, the
+// grid's links load as whole registers, and the AVX2 path gives the portable loop's result to the
+// bit (so a lab's PC without AVX2 simulates exactly what this one does).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "pbd_cloth/cloth_builder.h"
+#include "pbd_cloth/simulation.h"
+#include "pbd_cloth/stretch_links.h"
+#include "test_scenes.h"
+
+namespace pbd_cloth {
+namespace {
+
+// config/swinging.yaml in small: a flat 20 x 20 cloth with both diagonals swinging from two
+// corners; `diagonals` 1 is the default grid.
+SceneConfig swingingScene(int diagonals) {
+  SceneConfig scene = test::clothScene(20, 20, 0.05, Method::kXpbd);
+  scene.cloth.shear_diagonals = diagonals;
+  scene.cloth.bend_compliance = -1.0;
+  scene.cloth.self_collision = false;
+  scene.cloth.stretch_compliance = 0.0;
+  scene.cloth.pinned = {0, 19};
+  scene.solver.substeps = 10;
+  return scene;
+}
+
+StretchLinks linksOf(const SceneConfig& scene) {
+  Particles particles;
+  ClothTopology topology;
+  buildScene(scene, particles, topology);
+  StretchLinks links;
+  links.assign(topology.stretch, particles.size());
+  return links;
+}
+
+TEST(StretchLinks, NoTwoLinksOfABatchShareAParticle) {
+  for (int diagonals : {1, 2}) {
+    const StretchLinks links = linksOf(swingingScene(diagonals));
+    ASSERT_GT(links.batchCount(), 0);
+    EXPECT_EQ(links.batch_begin.back(), links.size());
+    for (int b = 0; b < links.batchCount(); ++b) {
+      std::vector<int> ends;
+      for (int c = links.batch_begin[b]; c < links.batch_begin[b + 1]; ++c) {
+        ends.push_back(links.i[c]);
+        ends.push_back(links.j[c]);
+      }
+      std::sort(ends.begin(), ends.end());
+      EXPECT_EQ(std::adjacent_find(ends.begin(), ends.end()), ends.end())
+          << "batch " << b << ", diagonals " << diagonals;
+    }
+  }
+}
+
+// The grid's sweep is laid out in runs that step through the particles (cloth_builder.cpp): on
+// both 20 x 20 grids at least 75 % of the links go four to a register (the rest: the last links
+// of each run, fewer than four; on the 50 x 50 benchmark cloth, 95 %).
+TEST(StretchLinks, GridLinksLoadAsWholeRegisters) {
+  for (int diagonals : {1, 2}) {
+    const StretchLinks links = linksOf(swingingScene(diagonals));
+    int in_registers = 0;
+    for (const StretchLinks::Segment& segment : links.segments) {
+      if (segment.layout != StretchLinks::Layout::kScalar)
+        in_registers += segment.end - segment.begin;
+    }
+    EXPECT_GE(in_registers, 0.75 * links.size()) << "diagonals " << diagonals;
+    // Segments cover the list in order, each inside its batch.
+    int next = 0;
+    for (int b = 0; b < links.batchCount(); ++b) {
+      for (int g = links.batch_segment[b]; g < links.batch_segment[b + 1]; ++g) {
+        EXPECT_EQ(links.segments[g].begin, next);
+        next = links.segments[g].end;
+        EXPECT_LE(next, links.batch_begin[b + 1]);
+      }
+    }
+    EXPECT_EQ(next, links.size());
+  }
+}
+
+// Three seconds of swinging, compliant and inextensible, both grids: the AVX2 path (where this
+// processor has it) and the portable loop end in the same positions, bit for bit.
+TEST(StretchLinks, Avx2AndPortablePathsAgreeToTheBit) {
+  if (!stretchLinksUseAvx2()) GTEST_SKIP() << "no AVX2 here: only the portable path runs";
+  for (int diagonals : {1, 2}) {
+    for (double compliance : {0.0, 1e-6}) {
+      SceneConfig scene = swingingScene(diagonals);
+      scene.cloth.stretch_compliance = compliance;
+      scene.solver.levels = compliance == 0.0 ? 3 : 0;
+      SceneConfig portable = scene;
+      portable.solver.simd = false;
+      Simulation with_simd(scene), without(portable);
+      const Vec3 corner_start = with_simd.particles().position[399];
+      for (int step = 0; step < 180; ++step) {
+        with_simd.step();
+        without.step();
+      }
+      EXPECT_EQ(with_simd.particles().position, without.particles().position)
+          << "diagonals " << diagonals << ", compliance " << compliance;
+      // And it moved: a test of two frozen cloths would pass too.
+      EXPECT_GT((with_simd.particles().position[399] - corner_start).norm(), 0.2);
+    }
+  }
+}
+
+// Coincident ends inside a group of four: that group goes link by link, the coincident link is
+// skipped and reported by its index, and its neighbours are still projected.
+TEST(StretchLinks, CoincidentEndsInsideARegisterGroupAreReportedByIndex) {
+  for (bool simd : {true, false}) {
+    std::vector<DistanceConstraint> list;
+    for (int k = 0; k < 4; ++k) list.push_back({k, k + 4, 1.0});  // contiguous: i = k, j = k + 4
+    Vec3Array x(8, Vec3::Zero());
+    for (int k = 0; k < 4; ++k) {
+      x[k] = Vec3(k * 10.0, 0.0, 0.0);
+      x[k + 4] = Vec3(k * 10.0, 2.0, 0.0);  // every link twice its rest length
+    }
+    x[6] = x[2];  // link 2: coincident ends
+    std::vector<double> inverse_mass(8, 1.0);
+    StretchLinks links;
+    links.assign(list, 8);
+    ASSERT_EQ(links.segments.size(), 1u);
+    EXPECT_EQ(links.segments[0].layout, StretchLinks::Layout::kContiguous);
+    links.prepareStep(inverse_mass.data(), 0.0);
+    std::vector<double> lambda(4, 0.0);
+    StretchProjection how;
+    how.simd = simd;
+    const StretchPassResult result =
+        projectStretchLinks(links, 0, links.batchCount(), how, x.front().data(), lambda.data());
+    EXPECT_EQ(result.degenerate, 1);
+    EXPECT_EQ(result.first_degenerate, 2);
+    EXPECT_EQ(lambda[2], 0.0);
+    for (int k : {0, 1, 3}) {
+      EXPECT_NEAR((x[k] - x[k + 4]).norm(), 1.0, 1e-12) << "link " << k << ", simd " << simd;
+    }
+    EXPECT_NEAR(result.max_change, 0.5, 1e-12);  // each end of a link moved by half its excess
+  }
+}
+
+// A link with both ends kinematic is skipped: nothing moves and its multiplier stays zero.
+TEST(StretchLinks, LinksWithoutAFreeEndAreSkipped) {
+  std::vector<DistanceConstraint> list = {{0, 1, 1.0}};
+  Vec3Array x = {Vec3::Zero(), Vec3(3.0, 0.0, 0.0)};
+  const Vec3Array before = x;
+  std::vector<double> inverse_mass = {0.0, 0.0}, lambda = {0.0};
+  StretchLinks links;
+  links.assign(list, 2);
+  links.prepareStep(inverse_mass.data(), 1e-3);
+  const StretchPassResult result =
+      projectStretchLinks(links, 0, 1, StretchProjection{}, x.front().data(), lambda.data());
+  EXPECT_EQ(x, before);
+  EXPECT_EQ(lambda[0], 0.0);
+  EXPECT_EQ(result.degenerate, 0);
+}
+
+}  // namespace
+}  // namespace pbd_cloth
