@@ -10,6 +10,7 @@
 #include "pbd_cloth/particles.h"
 #include "pbd_cloth/scene_config.h"
 #include "pbd_cloth/stretch_links.h"
+#include "pbd_cloth/worker_pool.h"
 
 namespace pbd_cloth {
 
@@ -88,8 +89,18 @@ class Solver {
   CoarseLevels coarse_;                 // solver.levels; empty when off or the cloth is a mesh
   std::vector<double> stretch_lambda_;  // XPBD multipliers, reset every substep
   StretchLinks stretch_links_;          // topology.stretch in flat arrays and batches (prepare)
-  Vec3Array bend_lambda_;               // one vector per hinge: C = scale b is vector-valued
-  Vec3Array jacobi_delta_;              // Jacobi: summed corrections per particle
+  std::vector<double> link_lambda_;     // their multipliers in stretch_links_' order
+  // solver.threads: the workers, and each thread's tasks of each phase of the links (a range of
+  // stretch_links_' tasks, balanced by link count): thread t of phase p runs tasks
+  // [thread_tasks_[p * (T + 1) + t], thread_tasks_[p * (T + 1) + t + 1]).
+  WorkerPool pool_;
+  std::vector<int> thread_tasks_;
+  std::vector<StretchPassResult> thread_results_;
+  void splitTasks();
+  bool fastStretch(const ClothTopology& topology) const;
+  double stretchLambda(int c, const ClothTopology& topology) const;
+  Vec3Array bend_lambda_;          // one vector per hinge: C = scale b is vector-valued
+  Vec3Array jacobi_delta_;         // Jacobi: summed corrections per particle
   std::vector<int> jacobi_count_;  // Jacobi: stretch and bend constraints on each free particle
   Vec3Array force_;                // mass_spring: force accumulator
   Vec3Array predicted_;            // x~ = x_prev + h v~ of the current substep (free particles)

@@ -25,8 +25,23 @@ struct StretchLinks {
   std::vector<int> i;  // particle indices of each link
   std::vector<int> j;
   std::vector<double> rest_length;  // m
+  std::vector<int> original;        // each link's index in the list given to assign()
+  std::vector<int> position;        // and back: position[original index] = index here
   // Batch b holds links [batch_begin[b], batch_begin[b + 1]); no two of them share a particle.
   std::vector<int> batch_begin;
+
+  // Blocks of a grid cloth for threads (solver.threads). The rows are cut into blocks; a link
+  // with both ends in one block belongs to that block's task, a link across two blocks to the
+  // seam task between them. Phase 0 = the blocks, top to bottom, phase 1 = the seams: the tasks
+  // of one phase share no particle (blocks hold different rows; seams are a block apart), so
+  // they may run on different threads in any order with the same result. The sweep is always
+  // this order (phase by phase, task by task, each task in the builder's top-down order),
+  // whatever the thread count: results are bit-identical for every solver.threads. Only the
+  // seams' links wait for the end of the sweep.
+  // Task t holds batches [task_batch[t], task_batch[t + 1]); phase p tasks [phase_task[p],
+  // phase_task[p + 1]). A mesh cloth or a grid under 8 rows is one task.
+  std::vector<int> task_batch;
+  std::vector<int> phase_task;
 
   // How a run of links is laid out in memory, found once in assign(). A grid's batches are rows
   // of links whose ends step through the particles regularly; four such links are loaded and
@@ -55,10 +70,15 @@ struct StretchLinks {
 
   int size() const { return static_cast<int>(i.size()); }
   int batchCount() const { return static_cast<int>(batch_begin.size()) - 1; }
-  // Copies the links in their order and cuts it into batches: each batch is the longest run from
-  // where the last one ended in which no particle repeats (the list's order is kept, so the sweep
-  // is the Gauss-Seidel sweep the builder laid out); then finds each batch's register layouts.
-  void assign(const std::vector<DistanceConstraint>& links, int particle_count);
+  int taskCount() const { return static_cast<int>(task_batch.size()) - 1; }
+  int phaseCount() const { return static_cast<int>(phase_task.size()) - 1; }
+  int taskLinks(int t) const { return batch_begin[task_batch[t + 1]] - batch_begin[task_batch[t]]; }
+  // Copies the links, grouped by task when grid_cols > 0 (a grid of grid_rows x grid_cols
+  // particles first in the particle list), each task in the list's order, and cuts each task
+  // into batches: the longest runs in which no particle repeats (so the sweep is the Gauss-Seidel
+  // sweep the builder laid out); then finds each batch's register layouts.
+  void assign(const std::vector<DistanceConstraint>& links, int particle_count, int grid_rows = 0,
+              int grid_cols = 0);
   void clear();
   // Before the projections of a step: alpha~ = compliance / h^2 of its substeps (0 for PBD).
   void prepareStep(const double* inverse_mass, double alpha);
@@ -79,9 +99,10 @@ struct StretchProjection {
 };
 
 struct StretchPassResult {
-  double max_change = 0.0;  // largest |dlambda| max(w_i, w_j): the largest particle move (m)
-  int degenerate = 0;       // links skipped because their particles coincide (no direction)
-  int first_degenerate = -1;
+  double max_change = 0.0;    // largest |dlambda| max(w_i, w_j): the largest particle move (m)
+  int degenerate = 0;         // links skipped because their particles coincide (no direction)
+  int first_degenerate = -1;  // the first of them in the sweep: its index here (see `original`)
+  void merge(const StretchPassResult& other);
 };
 
 // Projects the links of batches [first_batch, end_batch) in order, after links.prepareStep:

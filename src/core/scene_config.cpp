@@ -198,6 +198,7 @@ void validateSolver(const SolverConfig& s) {
   checkNumber("solver.spring_damping", s.spring_damping, kNonNegative);
   checkNumber("solver.bend_spring_stiffness", s.bend_spring_stiffness, kNonNegative);
   checkInteger("solver.levels", s.levels, 0, 16);
+  checkInteger("solver.threads", s.threads, 1, 64);
   checkNumber("solver.max_speed", s.max_speed, kPositive);
 }
 

@@ -60,6 +60,10 @@ Vec3 restBendVector(const BendConstraint& con, const BendRest& rest, const Parti
 
 void Solver::configure(const SolverConfig& solver, const ClothConfig& cloth) {
   config_ = solver;
+  if (pool_.threads() != config_.threads) {
+    pool_.resize(config_.threads);
+    splitTasks();
+  }
   stretch_compliance_ = cloth.stretch_compliance;
   bend_compliance_ = cloth.bend_compliance;
   spacing_ = cloth.spacing;
@@ -73,7 +77,10 @@ void Solver::configure(const SolverConfig& solver, const ClothConfig& cloth) {
 void Solver::prepare(const Particles& particles, const ClothTopology& topology) {
   const int n = particles.size();
   stretch_lambda_.assign(topology.stretch.size(), 0.0);
-  stretch_links_.assign(topology.stretch, n);
+  const bool grid = topology.rows > 0 && !topology.from_mesh;
+  stretch_links_.assign(topology.stretch, n, grid ? topology.rows : 0, grid ? topology.cols : 0);
+  link_lambda_.assign(topology.stretch.size(), 0.0);
+  splitTasks();
   bend_lambda_.assign(topology.bend.size(), Vec3::Zero());
   jacobi_delta_.assign(n, Vec3::Zero());
   jacobi_count_.assign(n, 0);
@@ -109,6 +116,44 @@ double Solver::stretchAlpha(double h) const {
   return config_.method == Method::kXpbd ? stretch_compliance_ / (h * h) : 0.0;
 }
 
+// Gauss-Seidel stretch goes through stretch_links_ when they were built for this topology.
+bool Solver::fastStretch(const ClothTopology& topology) const {
+  return !topology.stretch.empty() &&
+         stretch_links_.size() == static_cast<int>(topology.stretch.size());
+}
+
+double Solver::stretchLambda(int c, const ClothTopology& topology) const {
+  return config_.ordering != Ordering::kJacobi && fastStretch(topology)
+             ? link_lambda_[stretch_links_.position[c]]
+             : stretch_lambda_[c];
+}
+
+// Each phase's tasks cut into solver.threads contiguous ranges of about equal link counts. Which
+// thread runs which task changes nothing in the result (the tasks of a phase are independent).
+void Solver::splitTasks() {
+  const int threads = pool_.threads();
+  thread_results_.assign(threads, StretchPassResult());
+  thread_tasks_.clear();
+  for (int phase = 0; phase < stretch_links_.phaseCount(); ++phase) {
+    const int first = stretch_links_.phase_task[phase], end = stretch_links_.phase_task[phase + 1];
+    long total = 0;
+    for (int t = first; t < end; ++t) total += stretch_links_.taskLinks(t);
+    thread_tasks_.push_back(first);
+    long done = 0;
+    int task = first;
+    for (int t = 1; t < threads; ++t) {
+      // Thread t - 1 takes tasks until its share of the links (t / threads of the total) is met.
+      // A task goes to this thread when its middle lies within the thread's share.
+      while (task < end && (2 * done + stretch_links_.taskLinks(task)) * threads <= 2 * t * total) {
+        done += stretch_links_.taskLinks(task);
+        ++task;
+      }
+      thread_tasks_.push_back(task);
+    }
+    thread_tasks_.push_back(end);
+  }
+}
+
 double Solver::pbdStiffness(double k) const {
   // Mueller et al. 2007, sec. 3.3: k' = 1 - (1 - k)^(1/n) makes the stiffness after n passes
   // independent of n (it still depends on dt).
@@ -125,18 +170,38 @@ double Solver::dampingFactor(double h) const { return std::exp(-config_.damping 
 // stretch (a viscous damper exerts no force at rest; REFERENCE_CASES.md case 6). Kinematic
 // particles take their prescribed position at fraction s_end of the step instead.
 void Solver::predict(double h, double s_end, Particles& p) {
+  const int n = p.size();
+  if (n == 0) return;
   const double keep = dampingFactor(h);
   const Vec3 dv = h * config_.gravity;
-  for (int i = 0; i < p.size(); ++i) {
-    p.substep_start[i] = p.position[i];
-    if (p.inverse_mass[i] == 0.0) {
-      p.position[i] = (1.0 - s_end) * p.kinematic_from[i] + s_end * p.kinematic_to[i];
-      continue;
+  const int threads = pool_.threads();
+  // On the flat coordinate arrays, one particle's three in a row: the loop the compiler turns into
+  // straight vector code. Threads take equal ranges of particles (each particle on its own).
+  auto job = [&](int t) {
+    const int begin = static_cast<int>(static_cast<long>(n) * t / threads);
+    const int end = static_cast<int>(static_cast<long>(n) * (t + 1) / threads);
+    double* x = p.position.front().data();
+    double* v = p.velocity.front().data();
+    double* start = p.substep_start.front().data();
+    double* predicted = predicted_.front().data();
+    const double* w = p.inverse_mass.data();
+    for (int i = begin; i < end; ++i) {
+      for (int d = 0; d < 3; ++d) {
+        const int k = 3 * i + d;
+        start[k] = x[k];
+        if (w[i] == 0.0) continue;
+        v[k] = keep * v[k] + dv[d];
+        x[k] += h * v[k];
+        predicted[k] = x[k];
+      }
     }
-    p.velocity[i] = keep * p.velocity[i] + dv;
-    p.position[i] += h * p.velocity[i];
-    predicted_[i] = p.position[i];
-  }
+    for (int i = begin; i < end; ++i) {
+      if (w[i] == 0.0) {
+        p.position[i] = (1.0 - s_end) * p.kinematic_from[i] + s_end * p.kinematic_to[i];
+      }
+    }
+  };
+  pool_.run(job);
 }
 
 // Jacobi with averaging scales constraint c's multiplier step by w / max_k n_k over its free
@@ -165,17 +230,30 @@ double Solver::projectStretch(double h, Particles& p, const ClothTopology& topol
   const double alpha = stretchAlpha(h);
   const double k = config_.method == Method::kPbd ? pbdStiffness(config_.stretch_stiffness) : 1.0;
   const int count = static_cast<int>(topology.stretch.size());
-  if (!jacobi && count > 0 && stretch_links_.size() == count) {
-    // Gauss-Seidel: the flat, batched links (stretch_links.h), the same sweep in the same order.
+  if (!jacobi && fastStretch(topology)) {
+    // Gauss-Seidel: the flat, batched links (stretch_links.h), phase by phase; the tasks of a
+    // phase share no particle, so threads run them side by side with the sequential result.
     StretchProjection how;
     how.alpha = alpha;
     how.stiffness = k;
     how.simd = config_.simd;
-    const StretchPassResult result =
-        projectStretchLinks(stretch_links_, 0, stretch_links_.batchCount(), how,
-                            p.position.front().data(), stretch_lambda_.data());
+    double* x = p.position.front().data();
+    StretchPassResult result;
+    const int threads = pool_.threads();
+    for (int phase = 0; phase < stretch_links_.phaseCount(); ++phase) {
+      const int* range = &thread_tasks_[phase * (threads + 1)];
+      auto job = [&](int t) {
+        thread_results_[t] = projectStretchLinks(
+            stretch_links_, stretch_links_.task_batch[range[t]],
+            stretch_links_.task_batch[range[t + 1]], how, x, link_lambda_.data());
+      };
+      pool_.run(job);
+      for (int t = 0; t < threads; ++t) result.merge(thread_results_[t]);
+    }
     if (result.degenerate > 0) {
-      if (degenerate_in_pass_ == 0) first_degenerate_in_pass_ = result.first_degenerate;
+      if (degenerate_in_pass_ == 0) {
+        first_degenerate_in_pass_ = stretch_links_.original[result.first_degenerate];
+      }
       degenerate_in_pass_ += result.degenerate;
     }
     return result.max_change;
@@ -463,14 +541,26 @@ double Solver::projectPass(double h, Particles& p, const ClothTopology& topology
 // of v per substep to rounding, 1.5e-5 m over a 1 s fall at 6 kHz; REFERENCE_CASES.md,
 // "Precision"). Kinematic particles take the velocity of their prescribed motion.
 void Solver::updateVelocities(double h, Particles& p) {
+  const int n = p.size();
+  if (n == 0) return;
   const double inv_h = 1.0 / h;
-  for (int i = 0; i < p.size(); ++i) {
-    if (p.inverse_mass[i] == 0.0) {
-      p.velocity[i] = (p.position[i] - p.substep_start[i]) * inv_h;
-    } else {
-      p.velocity[i] += (p.position[i] - predicted_[i]) * inv_h;
+  const int threads = pool_.threads();
+  auto job = [&](int t) {
+    const int begin = static_cast<int>(static_cast<long>(n) * t / threads);
+    const int end = static_cast<int>(static_cast<long>(n) * (t + 1) / threads);
+    const double* x = p.position.front().data();
+    const double* start = p.substep_start.front().data();
+    const double* predicted = predicted_.front().data();
+    const double* w = p.inverse_mass.data();
+    double* v = p.velocity.front().data();
+    for (int i = begin; i < end; ++i) {
+      for (int d = 0; d < 3; ++d) {
+        const int k = 3 * i + d;
+        v[k] = w[i] == 0.0 ? (x[k] - start[k]) * inv_h : v[k] + (x[k] - predicted[k]) * inv_h;
+      }
     }
-  }
+  };
+  pool_.run(job);
 }
 
 // The explicit baseline: spring and damper forces, then symplectic Euler. Stable only while
@@ -567,7 +657,7 @@ void Solver::addMultiplierReactions(const Particles& p, const ClothTopology& top
     const Vec3 delta = p.position[con.i] - p.position[con.j];
     const double length = delta.norm();
     if (length < kMinLength) continue;
-    const Vec3 reaction = (stretch_lambda_[c] / length) * delta;  // lambda grad_i C
+    const Vec3 reaction = (stretchLambda(c, topology) / length) * delta;  // lambda grad_i C
     if (p.inverse_mass[con.i] == 0.0) {
       reaction_[con.i] += reaction;
     } else {
@@ -615,8 +705,7 @@ void Solver::step(double dt, Particles& p, const ClothTopology& topology, Collis
   if (config_.ordering == Ordering::kJacobi) countJacobiConstraints(p, topology);
   startReactions(p, topology);
   // The kinematic set and h are fixed for the step: each link's 1 / (w_i + w_j + alpha~) once.
-  if (config_.method != Method::kMassSpring && stretch_links_.size() > 0 &&
-      stretch_links_.size() == static_cast<int>(topology.stretch.size())) {
+  if (config_.method != Method::kMassSpring && fastStretch(topology)) {
     stretch_links_.prepareStep(p.inverse_mass.data(), stretchAlpha(h));
   }
   coarse_.prepareStep(p);
@@ -647,6 +736,7 @@ void Solver::step(double dt, Particles& p, const ClothTopology& topology, Collis
 
     // XPBD multipliers start at zero every substep (Small Steps, Algorithm 1).
     std::fill(stretch_lambda_.begin(), stretch_lambda_.end(), 0.0);
+    std::fill(link_lambda_.begin(), link_lambda_.end(), 0.0);
     std::fill(bend_lambda_.begin(), bend_lambda_.end(), Vec3::Zero());
     for (int pass = 0; pass < config_.iterations; ++pass) {
       ++stats_.iterations;

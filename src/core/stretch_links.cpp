@@ -221,7 +221,11 @@ void StretchLinks::clear() {
   i.clear();
   j.clear();
   rest_length.clear();
+  original.clear();
+  position.clear();
   batch_begin.assign(1, 0);
+  task_batch.assign(1, 0);
+  phase_task.assign(1, 0);
   segments.clear();
   batch_segment.assign(1, 0);
   inverse_mass_i.clear();
@@ -229,35 +233,100 @@ void StretchLinks::clear() {
   inverse_denominator.clear();
 }
 
-void StretchLinks::assign(const std::vector<DistanceConstraint>& links, int particle_count) {
+namespace {
+
+// Rows per block: eight blocks where the grid has the rows for them (two threads take four each),
+// at least four rows each (a seam's links touch two rows; seams two rows apart share none), else
+// one block (the whole grid, one task).
+int blockRows(int grid_rows) { return grid_rows >= 32 ? (grid_rows + 7) / 8 : grid_rows; }
+
+}  // namespace
+
+void StretchLinks::assign(const std::vector<DistanceConstraint>& links, int particle_count,
+                          int grid_rows, int grid_cols) {
   clear();
   const int count = static_cast<int>(links.size());
+  auto inside = [particle_count](int p) { return p >= 0 && p < particle_count; };
+  // Each link's task: phase 0 tasks (even blocks), phase 1 (odd blocks), phase 2 (seams).
+  const int grid_size = grid_rows * grid_cols;
+  const int rows_per_block = grid_cols > 0 ? std::max(1, blockRows(grid_rows)) : 1;
+  const int blocks = grid_cols > 0 ? (grid_rows + rows_per_block - 1) / rows_per_block : 1;
+  auto blockOf = [&](int p) { return p < grid_size ? p / grid_cols / rows_per_block : -1; };
+  // Task numbering: blocks 0 .. blocks - 1, then seams b | b + 1 for b = 0 .. blocks - 2.
+  const int task_count = blocks > 1 ? blocks + (blocks - 1) : 1;
+  std::vector<int> task_of(count, 0);
+  bool decomposable = blocks > 1;
+  for (int c = 0; c < count && decomposable; ++c) {
+    const int a = blockOf(links[c].i), b = blockOf(links[c].j);
+    if (a < 0 || b < 0 || std::abs(a - b) > 1) {
+      decomposable = false;  // a link off the grid or across more than one seam: one task
+    } else if (a == b) {
+      task_of[c] = a;
+    } else {
+      task_of[c] = blocks + std::min(a, b);
+    }
+  }
+  const int tasks = decomposable ? task_count : 1;
+  if (!decomposable) std::fill(task_of.begin(), task_of.end(), 0);
+  // Stable grouping by task.
+  std::vector<int> task_start(tasks + 1, 0);
+  for (int c = 0; c < count; ++c) ++task_start[task_of[c] + 1];
+  for (int t = 0; t < tasks; ++t) task_start[t + 1] += task_start[t];
+  original.assign(count, 0);
+  position.assign(count, 0);
+  {
+    std::vector<int> next(task_start.begin(), task_start.end() - 1);
+    for (int c = 0; c < count; ++c) {
+      const int at = next[task_of[c]]++;
+      original[at] = c;
+      position[c] = at;
+    }
+  }
   i.reserve(count);
   j.reserve(count);
   rest_length.reserve(count);
   // batch_of[p]: the batch that last touched particle p (-1: none yet).
   std::vector<int> batch_of(std::max(particle_count, 0), -1);
-  auto inside = [particle_count](int p) { return p >= 0 && p < particle_count; };
   int current = 0;
-  for (int c = 0; c < count; ++c) {
-    const DistanceConstraint& link = links[c];
-    i.push_back(link.i);
-    j.push_back(link.j);
-    rest_length.push_back(link.rest_length);
-    const bool shares = !inside(link.i) || !inside(link.j) || batch_of[link.i] == current ||
-                        batch_of[link.j] == current;
-    if (c > 0 && shares) {  // this link starts the next batch
-      batch_begin.push_back(c);
-      ++current;
+  for (int t = 0; t < tasks; ++t) {
+    for (int at = task_start[t]; at < task_start[t + 1]; ++at) {
+      const DistanceConstraint& link = links[original[at]];
+      i.push_back(link.i);
+      j.push_back(link.j);
+      rest_length.push_back(link.rest_length);
+      const bool starts_task = at == task_start[t];
+      const bool shares = !inside(link.i) || !inside(link.j) || batch_of[link.i] == current ||
+                          batch_of[link.j] == current;
+      if (at > 0 && (starts_task || shares)) {  // this link starts the next batch
+        batch_begin.push_back(at);
+        ++current;
+      }
+      if (inside(link.i)) batch_of[link.i] = current;
+      if (inside(link.j)) batch_of[link.j] = current;
     }
-    if (inside(link.i)) batch_of[link.i] = current;
-    if (inside(link.j)) batch_of[link.j] = current;
+    // The task ends with the batches so far (an empty task has none).
+    task_batch.push_back(task_start[t + 1] > 0 ? current + 1 : 0);
   }
   batch_begin.push_back(count);
+  if (count == 0) task_batch.assign(tasks + 1, 0);
+  // Phases: the blocks [0, blocks), then the seams [blocks, tasks).
+  if (tasks > 1) {
+    phase_task = {0, blocks, tasks};
+  } else {
+    phase_task = {0, tasks};
+  }
   inverse_mass_i.assign(count, 0.0);
   inverse_mass_j.assign(count, 0.0);
   inverse_denominator.assign(count, 0.0);
   findSegments(particle_count);
+}
+
+void StretchPassResult::merge(const StretchPassResult& other) {
+  max_change = std::max(max_change, other.max_change);
+  if (other.degenerate > 0 && (degenerate == 0 || other.first_degenerate < first_degenerate)) {
+    first_degenerate = other.first_degenerate;
+  }
+  degenerate += other.degenerate;
 }
 
 // The register layout of four links from c, if they have one: the particles each register

@@ -1,0 +1,55 @@
+// A fixed set of worker threads for the solver step (solver.threads): run(job) calls job(t) once
+// for every t in [0, threads), the calling thread taking t = 0, and returns when all are done.
+// Which work each t does is the caller's fixed partition, so results never depend on timing.
+//
+// Workers spin briefly between jobs (a substep syncs a few times within microseconds), then sleep
+// on a condition variable, so an idle node between steps costs no processor time. run() allocates
+// nothing: the job is passed as a function pointer and a context.
+#pragma once
+
+#include <atomic>
+#include <condition_variable>
+#include <cstdint>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+namespace pbd_cloth {
+
+class WorkerPool {
+ public:
+  WorkerPool() = default;
+  ~WorkerPool() { resize(1); }
+  WorkerPool(const WorkerPool&) = delete;
+  WorkerPool& operator=(const WorkerPool&) = delete;
+
+  // Starts or stops workers so that `threads` (>= 1) run each job, the caller included.
+  void resize(int threads);
+  int threads() const { return static_cast<int>(workers_.size()) + 1; }
+
+  template <typename Job>
+  void run(Job& job) {
+    if (workers_.empty()) {
+      job(0);
+      return;
+    }
+    dispatch([](void* context, int t) { (*static_cast<Job*>(context))(t); }, &job);
+  }
+
+ private:
+  using Call = void (*)(void*, int);
+  void dispatch(Call call, void* context);
+  void work(int index);
+
+  std::vector<std::thread> workers_;
+  std::atomic<std::uint64_t> generation_{0};
+  std::atomic<int> pending_{0};
+  std::atomic<int> sleeping_{0};
+  std::atomic<bool> stop_{false};
+  Call call_ = nullptr;
+  void* context_ = nullptr;
+  std::mutex mutex_;
+  std::condition_variable wake_;
+};
+
+}  // namespace pbd_cloth
