@@ -118,6 +118,12 @@ class Collisions {
   // stamps keep counting up, so no contact state of before can pass for a current one.
   void findCandidatesNow(const Particles& particles, const ClothTopology& topology);
 
+  // Sleeping (Simulation::step): whether a collider moves this step (its target differs from its
+  // pose) with its swept bounds within [lo, hi] grown by margin, or was enabled, disabled or
+  // replaced since the count `changes` was read.
+  bool colliderMovesNear(const Vec3& lo, const Vec3& hi, double margin) const;
+  long colliderChanges() const { return collider_changes_; }
+
   const CollisionStats& stats() const { return stats_; }
   // Sum over the step's passes of each particle-particle and self-contact's multiplier times its
   // gradient at the kinematic particles it touches (kg m; zero elsewhere): what the contact would
@@ -152,6 +158,7 @@ class Collisions {
   std::vector<FrictionConfig> obstacle_friction_;
   std::vector<char> enabled_;
   std::vector<char> teleport_;  // enabled again: jump to the next target
+  long collider_changes_ = 0;   // enabled, disabled or state set: counted for sleeping
   std::vector<Frame> frame_begin_;
   std::vector<Frame> frame_end_;
   Vec3Array obstacle_lo_;  // world bounds of each obstacle over the substep (begin and end poses)

@@ -93,6 +93,12 @@ struct SolverConfig {
   // ranges of particles. Bit-identical results for every count. 1 by default: a robot's computer
   // runs more than this node, and a spinning worker competes with it (README "Threads").
   int threads = 1;
+  // solver.sleep_speed (m/s) and solver.sleep_time (s): when every free particle has moved slower
+  // than sleep_speed for sleep_time, the scene sleeps: steps cost a check instead of a solve
+  // until something could move it (Simulation::step, "Sleeping"). 0 = never sleeps (the default,
+  // so benchmarks and accuracy tests always solve).
+  double sleep_speed = 0.0;
+  double sleep_time = 0.5;
 };
 
 struct FrictionConfig {

@@ -153,6 +153,14 @@ class Simulation {
   // fault of the latest undone step.
   std::uint64_t restoredSteps() const { return restored_steps_; }
   bool lastStepRestored() const { return last_step_restored_; }
+  // Sleeping (solver.sleep_speed): whether the scene sleeps now, and the steps it slept through
+  // since it was built (each cost a check, not a solve).
+  bool asleep() const { return asleep_; }
+  long sleptSteps() const { return slept_steps_; }
+  // Wakes a sleeping scene: anything from outside that could move it calls this (grasp, state,
+  // reset, solver or cloth parameters); the step's own checks catch moving pins, grippers and
+  // colliders.
+  void wake();
   const StepFault& lastFault() const { return last_fault_; }
   // The check itself, on the current state (kNone: the state can stand).
   StepFault findFault() const;
@@ -195,6 +203,9 @@ class Simulation {
   void kinematicSetChanged();
   void undoStep(const StepFault& fault);
   void findStartWarnings();
+  bool canSleepThrough() const;
+  void stepAwake(double dt, bool targets_set);
+  void updateSleep(double dt);
   void injectFault(double dt);
   // setState's check: empty when the state fits this scene, else what does not.
   std::string checkState(const SimulationState& state) const;
@@ -220,6 +231,14 @@ class Simulation {
   Vec3Array good_position_;
   std::uint64_t restored_steps_ = 0;
   bool last_step_restored_ = false;
+  // Sleeping: how long every free particle has been slower than solver.sleep_speed, whether the
+  // scene sleeps, the particles' bounds when it fell asleep, and the collider change count then.
+  double still_time_ = 0.0;
+  bool asleep_ = false;
+  long slept_steps_ = 0;
+  Vec3 sleep_lo_ = Vec3::Zero();
+  Vec3 sleep_hi_ = Vec3::Zero();
+  long sleep_collider_changes_ = 0;
   StepFault last_fault_;
   bool inject_ = false;
   InjectedFault injected_fault_ = InjectedFault::kNaN;

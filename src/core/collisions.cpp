@@ -46,6 +46,7 @@ void Collisions::configure(const SceneConfig& scene) {
 }
 
 int Collisions::addCollider(const ObstacleConfig& collider) {
+  ++collider_changes_;
   if (collider.shape == ShapeType::kMesh && !collider.mesh_data) {
     throw ConfigError(collider.name + ".mesh",
                       "the mesh '" + collider.mesh + "' is not loaded (scene_assets.h loadMesh)");
@@ -84,7 +85,29 @@ bool Collisions::setObstacleTarget(int obstacle, const Pose& target) {
   return true;
 }
 
+bool Collisions::colliderMovesNear(const Vec3& lo, const Vec3& hi, double margin) const {
+  const Vec3 near_lo = lo - Vec3::Constant(margin), near_hi = hi + Vec3::Constant(margin);
+  for (std::size_t k = 0; k < obstacles_.size(); ++k) {
+    if (!enabled_[k]) continue;
+    const Pose& from = obstacles_[k].pose;
+    const Pose& to = obstacle_targets_[k];
+    if (from.position == to.position && from.orientation.coeffs() == to.orientation.coeffs()) {
+      continue;
+    }
+    Vec3 a_lo, a_hi, b_lo, b_hi;
+    worldBounds(shapes_[k], interpolateFrame(from, to, 0.0), a_lo, a_hi);
+    worldBounds(shapes_[k], interpolateFrame(from, to, 1.0), b_lo, b_hi);
+    const Vec3 swept_lo = a_lo.cwiseMin(b_lo), swept_hi = a_hi.cwiseMax(b_hi);
+    if ((swept_lo.array() <= near_hi.array()).all() &&
+        (near_lo.array() <= swept_hi.array()).all()) {
+      return true;
+    }
+  }
+  return false;
+}
+
 void Collisions::setObstacleEnabled(int obstacle, bool enabled) {
+  if ((enabled_[obstacle] != 0) != enabled) ++collider_changes_;
   if (enabled && !enabled_[obstacle]) teleport_[obstacle] = 1;
   enabled_[obstacle] = enabled ? 1 : 0;
 }
@@ -388,6 +411,7 @@ void Collisions::getColliderState(int collider, BodySnapshot& body) const {
 }
 
 void Collisions::setColliderState(int collider, const BodySnapshot& body) {
+  ++collider_changes_;
   obstacles_[collider].pose = body.pose;
   obstacle_targets_[collider] = body.target;
   enabled_[collider] = body.enabled ? 1 : 0;

@@ -199,6 +199,8 @@ void validateSolver(const SolverConfig& s) {
   checkNumber("solver.bend_spring_stiffness", s.bend_spring_stiffness, kNonNegative);
   checkInteger("solver.levels", s.levels, 0, 16);
   checkInteger("solver.threads", s.threads, 1, 64);
+  checkNumber("solver.sleep_speed", s.sleep_speed, kNonNegative);
+  checkNumber("solver.sleep_time", s.sleep_time, kPositive);
   checkNumber("solver.max_speed", s.max_speed, kPositive);
 }
 

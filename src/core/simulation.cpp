@@ -217,7 +217,10 @@ bool Simulation::robotLinkEnabled(int link) const { return links_[link].enabled;
 
 // Starts again from the scene as configured now: live-tuned settings (setSolverConfig, ...) are
 // kept, since they were written into scene_.
-void Simulation::reset() { build(); }
+void Simulation::reset() {
+  build();
+  wake();
+}
 
 void Simulation::kinematicIndices(std::vector<unsigned>& out) const {
   out.clear();
@@ -312,6 +315,7 @@ void Simulation::releaseGrasp(GripperState& gripper) {
 }
 
 void Simulation::kinematicSetChanged() {
+  wake();  // a grasp or a release: the cloth is held differently
   if (scene_.cloth.tethers) {
     buildTethers(particles_, topology_, scene_.cloth.spacing, topology_.tethers);
   }
@@ -344,6 +348,7 @@ void Simulation::setSolverConfig(const SolverConfig& solver) {
   validate(candidate);
   scene_.solver = solver;
   solver_.configure(scene_.solver, scene_.cloth);
+  wake();  // gravity, damping or the solve changed: the rest state may no longer be one
 }
 
 void Simulation::setClothCompliance(double stretch_compliance, double bend_compliance) {
@@ -352,6 +357,7 @@ void Simulation::setClothCompliance(double stretch_compliance, double bend_compl
   candidate.cloth.bend_compliance = bend_compliance;
   validate(candidate);
   scene_.cloth = candidate.cloth;
+  wake();
   // A scene built with bending off (bend_compliance < 0) has no hinges: turning it on builds them
   // now, at the rest shape the scene was built with, exactly those a build with this compliance
   // would have, so bending acts from the next step and a reset() keeps it. (Turned off, the hinges
@@ -370,6 +376,7 @@ void Simulation::setFriction(const FrictionConfig& friction) {
   validate(candidate);
   scene_.cloth.friction = friction;
   collisions_.setFriction(friction);
+  wake();  // less friction may let a cloth at rest slide
 }
 
 // Scripted grippers: grasp events due by the start of this step fire, and the target is the
@@ -405,14 +412,91 @@ void Simulation::updateKinematicTargets(double dt) {
   }
 }
 
+// Sleeping. A scene whose free particles all stayed slower than solver.sleep_speed for
+// solver.sleep_time is at rest: its next solve would move nothing but rounding. It then sleeps:
+// a step checks what could move it, and while nothing does, only time advances (the particles
+// keep their positions, at zero velocity). It wakes, and that step solves, when a pinned or held
+// particle is to move, a collider moving near the particles' bounds (or enabled, disabled, set),
+// or wake() from outside (grasp and release, set_state, reset, solver, cloth or friction
+// parameters). One region, the whole scene: a cloth is one connected body, and a part of it at
+// rest next to a moving part is pulled along at once.
+bool Simulation::canSleepThrough() const {
+  if (!asleep_ || inject_) return false;
+  for (int i = 0; i < particles_.size(); ++i) {
+    if (particles_.isKinematic(i) && particles_.kinematic_to[i] != particles_.position[i]) {
+      return false;
+    }
+  }
+  if (collisions_.colliderChanges() != sleep_collider_changes_) return false;
+  // Within twice the largest contact reach of the particles, a moving collider may touch them.
+  double reach = 0.0;
+  for (double r : particles_.radius) reach = std::max(reach, r);
+  return !collisions_.colliderMovesNear(sleep_lo_, sleep_hi_, 2.0 * reach + 0.01);
+}
+
+void Simulation::updateSleep(double dt) {
+  const double limit = scene_.solver.sleep_speed;
+  if (limit <= 0.0) return;
+  double fastest_sq = 0.0;
+  for (int i = 0; i < particles_.size(); ++i) {
+    if (!particles_.isKinematic(i)) {
+      fastest_sq = std::max(fastest_sq, particles_.velocity[i].squaredNorm());
+    }
+  }
+  still_time_ = fastest_sq < limit * limit ? still_time_ + dt : 0.0;
+  if (still_time_ + 1e-12 < scene_.solver.sleep_time || particles_.size() == 0) return;
+  asleep_ = true;
+  sleep_lo_ = sleep_hi_ = particles_.position[0];
+  for (int i = 0; i < particles_.size(); ++i) {
+    if (!particles_.isKinematic(i)) particles_.velocity[i].setZero();
+    sleep_lo_ = sleep_lo_.cwiseMin(particles_.position[i]);
+    sleep_hi_ = sleep_hi_.cwiseMax(particles_.position[i]);
+  }
+  sleep_collider_changes_ = collisions_.colliderChanges();
+}
+
+void Simulation::wake() {
+  asleep_ = false;
+  still_time_ = 0.0;
+}
+
 void Simulation::step(double dt) {
+  if (asleep_) {
+    followTrajectories(time_ + dt);
+    followJointTrajectory(time_ + dt);
+    moveRobotColliders();
+    updateKinematicTargets(dt);
+    if (canSleepThrough()) {
+      for (GripperState& state : grippers_) state.pose = state.target;
+      for (RobotLinkState& link : links_) link.pose = link.target;
+      collisions_.endStep();  // colliders at their (unchanged) targets
+      time_ += dt;
+      ++slept_steps_;
+      StepStats& stats = solver_.mutableStats();
+      stats.sim_time += dt;
+      stats.step_wall_time = stats.predict_time = stats.collide_time = 0.0;
+      stats.project_time = stats.update_time = stats.contact_time = 0.0;
+      stats.iterations = 0;
+      last_step_restored_ = false;
+      return;
+    }
+    wake();
+    stepAwake(dt, /*targets_set=*/true);
+    return;
+  }
+  stepAwake(dt, /*targets_set=*/false);
+}
+
+void Simulation::stepAwake(double dt, bool targets_set) {
   if (fault_recovery_) {
     std::copy(particles_.position.begin(), particles_.position.end(), good_position_.begin());
   }
-  followTrajectories(time_ + dt);
-  followJointTrajectory(time_ + dt);
-  moveRobotColliders();
-  updateKinematicTargets(dt);
+  if (!targets_set) {
+    followTrajectories(time_ + dt);
+    followJointTrajectory(time_ + dt);
+    moveRobotColliders();
+    updateKinematicTargets(dt);
+  }
   if (inject_ && injected_fault_ == InjectedFault::kNaN) injectFault(dt);
   solver_.step(dt, particles_, topology_, collisions_);
   if (inject_ && injected_fault_ == InjectedFault::kBlowUp) injectFault(dt);
@@ -427,6 +511,7 @@ void Simulation::step(double dt) {
   StepStats& stats = solver_.mutableStats();
   computeStrain(particles_, topology_, stats.max_strain, stats.mean_strain);
   stats.max_penetration = collisions_.maxPenetration(particles_, topology_);
+  if (!last_step_restored_) updateSleep(dt);
 }
 
 StepFault Simulation::findFault() const {

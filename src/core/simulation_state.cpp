@@ -169,6 +169,7 @@ std::string Simulation::checkState(const SimulationState& state) const {
 }
 
 bool Simulation::setState(const SimulationState& state, std::string& reason) {
+  wake();
   reason = checkState(state);
   if (!reason.empty()) return false;
 

@@ -218,7 +218,7 @@ void readSolver(const YAML::Node& node, SolverConfig& s) {
       {"method", "substeps", "iterations", "tolerance", "ordering", "relaxation",
        "jacobi_averaging", "gravity", "damping", "stretch_stiffness", "bend_stiffness",
        "spring_stiffness", "spring_damping", "bend_spring_stiffness", "levels",
-       "levels_interpolate", "max_speed", "simd", "threads"});
+       "levels_interpolate", "max_speed", "simd", "threads", "sleep_speed", "sleep_time"});
   if (map.has("method")) {
     s.method = toWord(map.get("method"), map.keyOf("method"),
                       {Method::kXpbd, Method::kPbd, Method::kVerlet, Method::kMassSpring});
@@ -244,6 +244,8 @@ void readSolver(const YAML::Node& node, SolverConfig& s) {
   map.read("max_speed", s.max_speed);
   map.read("simd", s.simd);
   map.read("threads", s.threads);
+  map.read("sleep_speed", s.sleep_speed);
+  map.read("sleep_time", s.sleep_time);
 }
 
 void readCloth(const YAML::Node& node, ClothConfig& c) {

@@ -163,6 +163,10 @@ struct BenchResult {
   // Processor time of the step calls: on a shared machine it leaves out the time the process
   // waited for a core, which the wall time includes.
   double cpu_ms_per_step = 0.0;
+  // Sleeping: steps slept through (a check, not a solve), their mean wall time and the others'.
+  long long asleep_steps = 0;
+  double asleep_ms_per_step = 0.0;
+  double awake_ms_per_step = 0.0;
   double max_strain = 0.0;  // max over the run
   double max_penetration = 0.0;
   int max_self_intersections = 0;
@@ -266,13 +270,24 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
   long long broad_phase_runs = 0;
   long long iterations = 0;
   long long done = 0;
+  double asleep_seconds = 0.0, awake_seconds = 0.0;
+  long long asleep_steps = 0;
   using Clock = std::chrono::steady_clock;
   while (done < steps) {
+    const long slept_before = sim.sleptSteps();
     const Clock::time_point begin = Clock::now();
     const std::clock_t cpu_begin = std::clock();
     sim.step();
     step_cpu += std::clock() - cpu_begin;
-    step_seconds += std::chrono::duration<double>(Clock::now() - begin).count();
+    const double seconds = std::chrono::duration<double>(Clock::now() - begin).count();
+    step_seconds += seconds;
+    // Sleeping (solver.sleep_speed): the steps it slept through and the others, timed apart.
+    if (sim.sleptSteps() > slept_before) {
+      asleep_seconds += seconds;
+      ++asleep_steps;
+    } else {
+      awake_seconds += seconds;
+    }
     ++done;
     const pbd_cloth::StepStats& stats = sim.stats();
     predict += stats.predict_time;
@@ -309,6 +324,10 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
   result.final_metrics = last;
   result.wall_ms_per_step = 1e3 * step_seconds * per_step;
   result.cpu_ms_per_step = 1e3 * static_cast<double>(step_cpu) / CLOCKS_PER_SEC * per_step;
+  result.asleep_steps = asleep_steps;
+  result.asleep_ms_per_step = asleep_steps > 0 ? 1e3 * asleep_seconds / asleep_steps : 0.0;
+  result.awake_ms_per_step =
+      done > asleep_steps ? 1e3 * awake_seconds / (done - asleep_steps) : 0.0;
   result.iterations_per_step = static_cast<double>(iterations) * per_step;
   result.predict_ms = 1e3 * predict * per_step;
   result.collide_ms = 1e3 * collide * per_step;
@@ -327,14 +346,16 @@ void printResult(const pbd_cloth::SceneConfig& scene, const BenchResult& r) {
       "iterations_per_step=%.6g predict_ms=%.6g collide_ms=%.6g project_ms=%.6g update_ms=%.6g "
       "method=%s substeps=%d iterations=%d particles=%d max_self_intersections=%d "
       "sample_every=%d final_max_strain=%.9g ordering=%s contact_ms=%.6g broad_phase_runs=%.6g "
-      "final_structural_max_strain=%.9g final_structural_mean_strain=%.9g cpu_ms_per_step=%.6g",
+      "final_structural_max_strain=%.9g final_structural_mean_strain=%.9g cpu_ms_per_step=%.6g "
+      "asleep_steps=%lld asleep_ms_per_step=%.6g awake_ms_per_step=%.6g",
       r.wall_ms_per_step, r.max_strain, last.mean_strain, r.max_penetration,
       last.self_intersections, last.energy, last.finite ? 1 : 0, r.steps, r.sim_time,
       r.iterations_per_step, r.predict_ms, r.collide_ms, r.project_ms, r.update_ms,
       pbd_cloth::toString(scene.solver.method), scene.solver.substeps, scene.solver.iterations,
       r.particles, r.max_self_intersections, r.sample_every, last.max_strain,
       pbd_cloth::toString(scene.solver.ordering), r.contact_ms, r.broad_phase_runs,
-      last.structural_max_strain, last.structural_mean_strain, r.cpu_ms_per_step);
+      last.structural_max_strain, last.structural_mean_strain, r.cpu_ms_per_step, r.asleep_steps,
+      r.asleep_ms_per_step, r.awake_ms_per_step);
   if (r.depth_ms >= 0.0) std::printf(" depth_ms=%.6g", r.depth_ms);
   std::printf("\n");
 }
