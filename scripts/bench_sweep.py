@@ -52,7 +52,8 @@ def splits(totals):
 # at every step of a crumpled 50 x 50 cloth (the cheapest settings) takes up to 20 s a run; every
 # 3rd step (50 ms) changes max_strain by under 2 % and keeps the whole sweep under 15 minutes.
 CLOTH_SAMPLE_EVERY = 3
-CLOTH_SCENES = ('hanging.yaml', 'drape.yaml', 'swinging.yaml')
+CLOTH_SCENES = ('hanging.yaml', 'drape.yaml', 'swinging.yaml', 'fabric_table.yaml',
+                'towel_on_table.yaml')
 
 
 class Run(object):
@@ -178,6 +179,14 @@ SWINGING_VARIANTS = {
     'xpbd + levels, interpolated': (['solver.levels=5', 'solver.levels_interpolate=true'],
                                     {'variant': 'levels_interpolated'},
                                     substeps_only([10, 20, 40, 80])),
+    # The same levels without the AVX2 path (solver.simd=false, the portable loop every x86-64 and
+    # other processors run): what SIMD buys, with bit-identical results.
+    'xpbd + levels, portable loop': (['solver.levels=5', 'solver.simd=false'],
+                                     {'variant': 'levels_portable'}, substeps_only([40, 60, 80])),
+    # Two threads (solver.threads=2): row blocks of the stretch links side by side, prediction and
+    # velocity update in halves; bit-identical to one thread.
+    'xpbd + levels, 2 threads': (['solver.levels=5', 'solver.threads=2'],
+                                 {'variant': 'levels_2_threads'}, substeps_only([40, 60, 80])),
 }
 
 
@@ -216,6 +225,59 @@ def swinging_runs(quick):
             run.fields.update(fields)
             runs.append(run)
     return runs
+
+
+def swinging100_runs(quick):
+    """config/swinging.yaml at 100 x 100 (issue 12, target 2): the same 1 m cloth, 4x the
+    particles; levels=6 are all a 100 x 100 grid has."""
+    n = 20 if quick else 100
+    duration = 1.0 if quick else 3.0
+    grid = ['cloth.rows=%d' % n, 'cloth.cols=%d' % n, 'cloth.spacing=%r' % (1.0 / (n - 1)),
+            'cloth.pinned=[0, %d]' % (n - 1)]
+    levels = ['solver.levels=6']
+    if quick:
+        plan = [('xpbd + levels', levels, substeps_only([10])),
+                ('bullet', [], substeps_only([5]))]
+    else:
+        plan = [('xpbd + levels', levels, substeps_only([40, 60, 80, 120, 160])),
+                ('xpbd + levels, 2 threads', levels + ['solver.threads=2'],
+                 substeps_only([60, 80, 120])),
+                ('xpbd', [], substeps_only([80, 160, 320])),
+                ('bullet', [], substeps_only([64, 128, 256]) + [(16, 10)])]
+    runs = [pbd_run('swinging100', 'swinging.yaml', 'start', 'xpbd', 1, 1, 0.0, grid,
+                    level='start')]
+    for curve, sets, pairs in plan:
+        for s, i in pairs:
+            if curve == 'bullet':
+                runs.append(bullet_run('swinging100', 'swinging.yaml', curve, s, i, duration, grid))
+            else:
+                runs.append(pbd_run('swinging100', 'swinging.yaml', curve, 'xpbd', s, i, duration,
+                                    grid + sets))
+    return runs
+
+
+def fabric_runs(quick):
+    """config/fabric_table.yaml, 2 s (issue 12, target 3): fabric_simulator's settings, dt 3 ms
+    and 12 substeps, with and without self-collision, one and two threads."""
+    duration = 0.5 if quick else 2.0
+    runs = []
+    for self_collision in ('false', 'true'):
+        for threads in (1, 2):
+            curve = 'xpbd' + (' + self-collision' if self_collision == 'true' else '') + \
+                (', 2 threads' if threads == 2 else '')
+            runs.append(pbd_run('fabric', 'fabric_table.yaml', curve, 'xpbd', 12, 1, duration,
+                                ['cloth.self_collision=%s' % self_collision,
+                                 'solver.threads=%d' % threads]))
+    return runs
+
+
+def towel_runs(quick):
+    """config/towel_on_table.yaml, 6 s (issue 12, target 6): a towel drops 2 cm onto a table and
+    lies still; with sleeping on, the steps it sleeps through are timed apart from the others."""
+    duration = 2.0 if quick else 6.0
+    return [pbd_run('towel', 'towel_on_table.yaml', 'xpbd, sleeping', 'xpbd', 10, 1, duration),
+            pbd_run('towel', 'towel_on_table.yaml', 'xpbd, never sleeps', 'xpbd', 10, 1, duration,
+                    ['solver.sleep_speed=0'])]
 
 
 def drape_runs(quick):
@@ -467,7 +529,8 @@ def main():
                         help='rounds of the timed sweeps (median time kept); default 3 for '
                         'swinging, 1 for the others')
     parser.add_argument('--only', nargs='*', default=None,
-                        help='sweeps to run: hanging swinging drape chain stability '
+                        help='sweeps to run: hanging swinging swinging100 fabric towel drape '
+                        'chain stability '
                         '(default: all)')
     args = parser.parse_args()
     bin_dir = os.path.abspath(args.bin_dir)
@@ -477,6 +540,8 @@ def main():
     os.makedirs(args.out, exist_ok=True)
     # The swinging sweep is issue 12's benchmark: its times are the medians of 3 rounds.
     plan = [('hanging', hanging_runs, 1, 1), ('swinging', swinging_runs, 1, 3),
+            ('swinging100', swinging100_runs, 1, 1), ('fabric', fabric_runs, 1, 3),
+            ('towel', towel_runs, 1, 1),
             ('drape', drape_runs, 1, 1), ('chain', chain_runs, 1, 1),
             # Only stability and error are read from this one, not time: both cores.
             ('stability', stability_runs, 2, 1)]

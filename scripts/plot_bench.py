@@ -396,16 +396,17 @@ def verdict(row):
     return 'ok' if converged_run(row) else 'diverged'
 
 
-def swinging_summary(add, swinging):
+def swinging_summary(add, swinging, name='swinging', size=50):
     """Issue 12's benchmark: which settings reach 1 % max / 0.1 % mean structural strain."""
     add('')
-    add('## Swinging cloth (config/swinging.yaml, issue 12): cost of 1 % max / 0.1 % mean strain')
+    add('## Swinging cloth (config/swinging.yaml%s, issue 12): cost of 1 %% max / 0.1 %% mean '
+        'strain' % ('' if size == 50 else ' at %d x %d' % (size, size)))
     add('')
-    add('50 x 50, 1 m, structural links and both diagonals per cell, zero compliance, no bending, '
+    add('%d x %d, 1 m, structural links and both diagonals per cell, zero compliance, no bending, '
         'no tethers; starts flat and swings down from two pinned corners for 3 s at 60 Hz. Error: '
         'strain of the structural links in the final state (`final_structural_max_strain`, '
         '`final_structural_mean_strain`), Bullet on the same links. N x M = substeps x '
-        'iterations (Bullet: internal steps x position iterations).')
+        'iterations (Bullet: internal steps x position iterations).' % (size, size))
     add('')
     add('| curve | cheapest with max <= 1 % | cheapest with mean <= 0.1 % | cheapest with both | '
         'best max strain (ms) |')
@@ -438,7 +439,7 @@ def swinging_summary(add, swinging):
             'machine (other builds), so compare times within this run, not across runs.' % (
                 '/'.join(sorted(rounds)) or '1', min(loads), max(loads)))
     add('')
-    add('Every run (the command of each is in doc/sweep_swinging.csv):')
+    add('Every run (the command of each is in doc/sweep_%s.csv):' % name)
     add('')
     add('| curve | N x M | wall ms/step | cpu ms/step | project ms | final max strain | '
         'final mean strain | max strain over the run, all links | verdict | --set |')
@@ -457,7 +458,123 @@ def swinging_summary(add, swinging):
         % DIVERGED_STRAIN)
 
 
-def summary(data_dir, hanging, drape, chain, stability, env_text, swinging=()):
+def micro_ns(micro, name):
+    for row in micro:
+        if row['name'].replace('/manual_time', '') == name and row.get('ns_per_item'):
+            return number(row['ns_per_item'])
+    return None
+
+
+def issue12_summary(add, data_dir, swinging, swinging100, fabric, towel, micro):
+    """Issue 12's targets, each with what this run measured (all from the CSVs of doc/)."""
+    add('')
+    add('## Issue 12 targets: what this run measured')
+    add('')
+    add('| # | target | measured (this run) | met |')
+    add('|---|---|---|---|')
+    mx, mn = 'final_structural_max_strain', 'final_structural_mean_strain'
+
+    def cheapest_both(rows, curve):
+        both = [r for r in rows if r['curve'] == curve and converged_run(r) and
+                r[mx] <= SWING_MAX_TARGET and r[mn] <= SWING_MEAN_TARGET]
+        return min(both, key=lambda r: r['wall_ms_per_step']) if both else None
+
+    for number_, rows, curve, goal, fallback, size in (
+            (1, swinging, 'xpbd + levels', 1.6, 5.0, 50),
+            (2, swinging100, 'xpbd + levels', 6.5, 20.0, 100)):
+        run = cheapest_both(rows, curve) if rows else None
+        if run:
+            ms = run['wall_ms_per_step']
+            met = 'yes' if ms <= goal else ('fallback (<= %g ms)' % fallback if ms <= fallback
+                                           else 'no')
+            add('| %d | %d x %d swinging, 1 %% / 0.1 %%, one thread: <= %g ms (at least <= %g) | '
+                '%s, %s %dx%d (%.3g / %.3g) | %s |' % (
+                    number_, size, size, goal, fallback, fmt_ms(ms), curve, run['substeps'],
+                    run['iterations'], run[mx], run[mn], met))
+        else:
+            add('| %d | %d x %d swinging | not reached in this run | no |' % (number_, size, size))
+    if fabric:
+        for curve, goal in (('xpbd', 1.5), ('xpbd + self-collision', 3.0)):
+            run = next((r for r in fabric if r['curve'] == curve), None)
+            if run:
+                add('| 3 | fabric_table.yaml (dt 3 ms, 12 substeps) %s: <= %g ms | %s (cpu %s) '
+                    '| %s |' % (curve, goal, fmt_ms(run['wall_ms_per_step']),
+                                fmt_ms(run['cpu_ms_per_step']),
+                                'yes' if run['wall_ms_per_step'] <= goal else 'no'))
+    pairs = [(swinging, 'xpbd + levels', 'xpbd + levels, 2 threads', '50 x 50 swinging'),
+             (swinging100, 'xpbd + levels', 'xpbd + levels, 2 threads', '100 x 100 swinging'),
+             (fabric, 'xpbd + self-collision', 'xpbd + self-collision, 2 threads',
+              'fabric_table + self-collision')]
+    for rows, one, two, label in pairs:
+        if not rows:
+            continue
+        for a in sorted([r for r in rows if r['curve'] == one], key=lambda r: r['substeps']):
+            b = next((r for r in rows if r['curve'] == two and r['substeps'] == a['substeps']
+                      and r['iterations'] == a['iterations']), None)
+            if b:
+                same = a[mx] == b[mx] and a[mn] == b[mn] if mx in a and mx in b else None
+                add('| 4 | threads: 2 measurably faster, same result (%s %dx%d) | 1 thread %s, '
+                    '2 threads %s: x%.2f; final strains %s | %s |' % (
+                        label, a['substeps'], a['iterations'], fmt_ms(a['wall_ms_per_step']),
+                        fmt_ms(b['wall_ms_per_step']),
+                        a['wall_ms_per_step'] / b['wall_ms_per_step'],
+                        'identical' if same else 'differ',
+                        'yes' if b['wall_ms_per_step'] < 0.9 * a['wall_ms_per_step'] and same
+                        else 'no'))
+    simd, portable, bare = (micro_ns(micro, 'BM_StretchLinks/simd:1'),
+                            micro_ns(micro, 'BM_StretchLinks/simd:0'),
+                            micro_ns(micro, 'BM_StretchBareLoop'))
+    if simd and bare:
+        add('| 5 | stretch projection within 1.5x of a bare loop (Google Benchmark pair) | '
+            'AVX2 %.3g ns, portable %.3g ns, bare loop %.3g ns per link: x%.2f and x%.2f | %s |'
+            % (simd, portable or float('nan'), bare, simd / bare,
+               (portable or float('nan')) / bare, 'yes' if simd <= 1.5 * bare and
+               (portable is None or portable <= 1.5 * bare) else 'no'))
+    if towel:
+        run = next((r for r in towel if r['curve'] == 'xpbd, sleeping'), None)
+        if run and number(run.get('asleep_ms_per_step'), 0.0) > 0:
+            asleep, awake = number(run['asleep_ms_per_step']), number(run['awake_ms_per_step'])
+            add('| 6 | towel at rest <= 10 %% of its moving cost | asleep %.3g ms, awake %.3g ms '
+                'per step (%d steps asleep): %.2g %% | %s |' % (
+                    asleep, awake, int(number(run['asleep_steps'], 0)), 100.0 * asleep / awake,
+                    'yes' if asleep <= 0.1 * awake else 'no'))
+    path = os.path.join(data_dir, 'self_collision_scaling.csv')
+    if os.path.exists(path):
+        with open(path, newline='') as handle:
+            rows = list(csv.DictReader(handle))
+        growth = [number(r.get('broad_plus_contact_on_per_doubling'))
+                  for r in rows if r.get('broad_plus_contact_on_per_doubling')]
+        if growth:
+            add('| 7 | self-collision broad phase + contacts <= x2.3 per doubling, 32 x 32 to 128 x '
+                '128 | %s (doc/self_collision_scaling.csv) | %s |' % (
+                    ', '.join('x%.2f' % g for g in growth),
+                    'yes' if max(growth) <= 2.3 else 'no'))
+
+
+def extra_summaries(add, swinging100, fabric, towel):
+    if swinging100:
+        swinging_summary(add, swinging100, 'swinging100', 100)
+    for rows, title in ((fabric, 'fabric_simulator\'s settings (config/fabric_table.yaml, dt 3 ms, '
+                                 '12 substeps, 2 s)'),
+                        (towel, 'A towel at rest (config/towel_on_table.yaml, 6 s)')):
+        if not rows:
+            continue
+        add('')
+        add('## %s' % title)
+        add('')
+        add('| curve | wall ms/step | cpu ms/step | asleep steps | asleep ms/step | awake ms/step | '
+            'max penetration (m) | self-intersections | --set |')
+        add('|---|---|---|---|---|---|---|---|---|')
+        for r in rows:
+            add('| %s | %.3g | %.3g | %s | %s | %s | %.3g | %s | `%s` |' % (
+                r['curve'], r['wall_ms_per_step'], r['cpu_ms_per_step'],
+                r.get('asleep_steps', ''), r.get('asleep_ms_per_step', ''),
+                r.get('awake_ms_per_step', ''), number(r.get('max_penetration'), 0.0),
+                r.get('max_self_intersections', ''), r.get('sets', '')))
+
+
+def summary(data_dir, hanging, drape, chain, stability, env_text, swinging=(), swinging100=(),
+            fabric=(), towel=()):
     out = []
     add = out.append
     add('# Bench summary')
@@ -468,7 +585,8 @@ def summary(data_dir, hanging, drape, chain, stability, env_text, swinging=()):
         'those of the last run; a run with `--only` rewrites only its own CSVs, so compare the '
         'times of the CSVs written by one run.')
     add('')
-    for name in ('hanging', 'swinging', 'drape', 'chain', 'stability'):
+    for name in ('hanging', 'swinging', 'swinging100', 'fabric', 'towel', 'drape', 'chain',
+                 'stability'):
         path = os.path.join(data_dir, 'sweep_%s.csv' % name)
         if os.path.exists(path):
             with open(path, newline='') as handle:
@@ -585,8 +703,11 @@ def summary(data_dir, hanging, drape, chain, stability, env_text, swinging=()):
             else:
                 add('| %s | not reached | | | |' % curve)
 
+    micro = read_microbench(os.path.join(data_dir, 'microbench.csv'))
+    issue12_summary(add, data_dir, swinging, swinging100, fabric, towel, micro)
     if swinging:
         swinging_summary(add, swinging)
+    extra_summaries(add, swinging100, fabric, towel)
 
     if drape:
         add('')
@@ -688,9 +809,12 @@ def main():
     hanging = load(os.path.join(data, 'sweep_hanging.csv'))
     drape = load(os.path.join(data, 'sweep_drape.csv'))
     swinging = swinging_verdicts(load(os.path.join(data, 'sweep_swinging.csv')))
+    swinging100 = swinging_verdicts(load(os.path.join(data, 'sweep_swinging100.csv')))
+    fabric = load(os.path.join(data, 'sweep_fabric.csv'))
+    towel = load(os.path.join(data, 'sweep_towel.csv'))
     chain = load(os.path.join(data, 'sweep_chain.csv'))
     stability = load(os.path.join(data, 'sweep_stability.csv'))
-    if not (hanging or swinging or drape or chain or stability):
+    if not (hanging or swinging or swinging100 or fabric or towel or drape or chain or stability):
         sys.exit('plot_bench: no sweep_*.csv in %s (run scripts/run_bench first)' % data)
     written = []
     if hanging:
@@ -711,6 +835,17 @@ def main():
                       'config/swinging.yaml (issue 12: 50 x 50, both diagonals, no bending, swings '
                       'from two pinned corners, 3 s at 60 Hz): pbd_cloth and Bullet on the same '
                       'links', path)
+        written.append(path)
+    if swinging100:
+        path = os.path.join(data, 'pareto_swinging100.png')
+        pareto_figure(swinging100, [('final_structural_max_strain',
+                                     'max strain of the structural links at the end',
+                                     SWING_MAX_TARGET),
+                                    ('final_structural_mean_strain',
+                                     'mean strain of the structural links at the end',
+                                     SWING_MEAN_TARGET)],
+                      'config/swinging.yaml at 100 x 100 (issue 12, target 2): pbd_cloth and '
+                      'Bullet on the same links', path)
         written.append(path)
     if drape:
         path = os.path.join(data, 'pareto_drape.png')
@@ -736,7 +871,8 @@ def main():
     if args.env and os.path.exists(args.env):
         with open(args.env) as handle:
             env_text = handle.read()
-    text = summary(data, hanging, drape, chain, verdicts, env_text, swinging)
+    text = summary(data, hanging, drape, chain, verdicts, env_text, swinging, swinging100, fabric,
+                   towel)
     path = os.path.join(data, 'bench_summary.md')
     with open(path, 'w') as handle:
         handle.write(text)

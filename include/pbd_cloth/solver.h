@@ -68,6 +68,8 @@ class Solver {
                      bool first_pass);
   double projectStretch(double h, Particles& p, const ClothTopology& topology);
   double projectBend(double h, Particles& p, const ClothTopology& topology);
+  double projectFlatBend(Particles& p, const ClothTopology& topology, double alpha, double k);
+  void prepareBendStep(const Particles& p, const ClothTopology& topology, double h);
   double projectTethers(Particles& p, const ClothTopology& topology);
   void applyJacobi(Particles& p, double& max_change);
   void updateVelocities(double h, Particles& p);
@@ -99,7 +101,12 @@ class Solver {
   void splitTasks();
   bool fastStretch(const ClothTopology& topology) const;
   double stretchLambda(int c, const ClothTopology& topology) const;
-  Vec3Array bend_lambda_;          // one vector per hinge: C = scale b is vector-valued
+  Vec3Array bend_lambda_;  // one vector per hinge: C = scale b is vector-valued
+  // Per step (prepareBendStep): each hinge's 1 / (w + alpha~), its vertices' w_k K_k and the
+  // largest of those (the largest move per unit of direction).
+  std::vector<double> bend_inverse_denominator_;
+  std::vector<double> bend_factor_;
+  std::vector<double> bend_largest_factor_;
   Vec3Array jacobi_delta_;         // Jacobi: summed corrections per particle
   std::vector<int> jacobi_count_;  // Jacobi: stretch and bend constraints on each free particle
   Vec3Array force_;                // mass_spring: force accumulator

@@ -82,6 +82,9 @@ void Solver::prepare(const Particles& particles, const ClothTopology& topology) 
   link_lambda_.assign(topology.stretch.size(), 0.0);
   splitTasks();
   bend_lambda_.assign(topology.bend.size(), Vec3::Zero());
+  bend_inverse_denominator_.assign(topology.bend.size(), 0.0);
+  bend_factor_.assign(4 * topology.bend.size(), 0.0);
+  bend_largest_factor_.assign(topology.bend.size(), 0.0);
   jacobi_delta_.assign(n, Vec3::Zero());
   jacobi_count_.assign(n, 0);
   force_.assign(n, Vec3::Zero());
@@ -304,6 +307,9 @@ double Solver::projectBend(double h, Particles& p, const ClothTopology& topology
   double max_change = 0.0;
   const int count = static_cast<int>(topology.bend.size());
   const bool has_rest = !topology.bend_rest.empty();
+  if (!jacobi && !has_rest && bend_inverse_denominator_.size() == topology.bend.size()) {
+    return projectFlatBend(p, topology, alpha, k);
+  }
   for (int c = 0; c < count; ++c) {
     const BendConstraint& con = topology.bend[c];
     double w = 0.0;
@@ -347,6 +353,51 @@ double Solver::projectBend(double h, Particles& p, const ClothTopology& topology
     max_change = std::max(max_change, largest_weight * direction.norm());
   }
   return max_change;
+}
+
+// The hinges of a flat rest shape (every grid hinge) in Gauss-Seidel order, with what is fixed
+// for a step computed once in prepareBendStep: the generalized inverse mass w = scale^2 sum_k w_k
+// K_k^2 as 1 / (w + alpha~) (XPBD eq. 18; PBD: k / w with alpha~ = 0), and each vertex's w_k K_k.
+// The same projection as the loop of projectBend, with one division per hinge per step instead of
+// one per pass and no per-vertex weight arithmetic.
+double Solver::projectFlatBend(Particles& p, const ClothTopology& topology, double alpha,
+                               double k) {
+  const int count = static_cast<int>(topology.bend.size());
+  double largest_sq = 0.0;
+  for (int c = 0; c < count; ++c) {
+    const double inverse_denominator = bend_inverse_denominator_[c];
+    if (inverse_denominator == 0.0) continue;
+    const BendConstraint& con = topology.bend[c];
+    const Vec3 constraint = con.scale * bendVector(con, p);
+    const Vec3 dlambda = (-k * constraint - alpha * bend_lambda_[c]) * inverse_denominator;
+    bend_lambda_[c] += dlambda;
+    const Vec3 direction = con.scale * dlambda;
+    const double* factor = &bend_factor_[4 * c];
+    for (int v = 0; v < 4; ++v) p.position[con.index[v]] += factor[v] * direction;
+    largest_sq = std::max(
+        largest_sq, bend_largest_factor_[c] * bend_largest_factor_[c] * direction.squaredNorm());
+  }
+  return std::sqrt(largest_sq);
+}
+
+void Solver::prepareBendStep(const Particles& p, const ClothTopology& topology, double h) {
+  const int count = static_cast<int>(topology.bend.size());
+  if (static_cast<int>(bend_inverse_denominator_.size()) != count) return;
+  const double alpha = config_.method == Method::kXpbd ? bend_compliance_ / (h * h) : 0.0;
+  for (int c = 0; c < count; ++c) {
+    const BendConstraint& con = topology.bend[c];
+    double w = 0.0, largest = 0.0;
+    for (int v = 0; v < 4; ++v) {
+      const double wv = p.inverse_mass[con.index[v]];
+      w += wv * con.weight[v] * con.weight[v];
+      bend_factor_[4 * c + v] = wv * con.weight[v];
+      largest = std::max(largest, std::abs(bend_factor_[4 * c + v]));
+    }
+    w *= con.scale * con.scale;
+    bend_largest_factor_[c] = largest;
+    // PBD: dlambda = -k C / w = (-k C - 0 lambda) * (1 / w), k applied by the projection.
+    bend_inverse_denominator_[c] = w < kMinInverseMass ? 0.0 : 1.0 / (w + alpha);
+  }
 }
 
 namespace {
@@ -709,6 +760,9 @@ void Solver::step(double dt, Particles& p, const ClothTopology& topology, Collis
     stretch_links_.prepareStep(p.inverse_mass.data(), stretchAlpha(h));
   }
   coarse_.prepareStep(p);
+  if (bend_compliance_ >= 0.0 && config_.method != Method::kMassSpring) {
+    prepareBendStep(p, topology, h);
+  }
 
   // Find contacts at the step start; every substep enforces them (Jolt's "collide" phase).
   // Collisions::project searches again in a substep whose prediction left the swept boxes.
