@@ -824,29 +824,20 @@ def main():
                       'config/hanging.yaml (50 x 50, 1 m, two pinned corners, 3 s at 60 Hz): '
                       'cost against stretch error, pbd_cloth and Bullet on the same links', path)
         written.append(path)
-    if swinging:
-        path = os.path.join(data, 'pareto_swinging.png')
-        pareto_figure(swinging, [('final_structural_max_strain',
-                                  'max strain of the structural links at the end',
-                                  SWING_MAX_TARGET),
-                                 ('final_structural_mean_strain',
-                                  'mean strain of the structural links at the end',
-                                  SWING_MEAN_TARGET)],
-                      'config/swinging.yaml (issue 12: 50 x 50, both diagonals, no bending, swings '
-                      'from two pinned corners, 3 s at 60 Hz): pbd_cloth and Bullet on the same '
-                      'links', path)
-        written.append(path)
-    if swinging100:
-        path = os.path.join(data, 'pareto_swinging100.png')
-        pareto_figure(swinging100, [('final_structural_max_strain',
-                                     'max strain of the structural links at the end',
-                                     SWING_MAX_TARGET),
-                                    ('final_structural_mean_strain',
-                                     'mean strain of the structural links at the end',
-                                     SWING_MEAN_TARGET)],
-                      'config/swinging.yaml at 100 x 100 (issue 12, target 2): pbd_cloth and '
-                      'Bullet on the same links', path)
-        written.append(path)
+    swing_metrics = [('final_structural_max_strain', 'max strain of the structural links at the end',
+                      SWING_MAX_TARGET),
+                     ('final_structural_mean_strain',
+                      'mean strain of the structural links at the end', SWING_MEAN_TARGET)]
+    for rows, name, title in (
+            (swinging, 'swinging', 'config/swinging.yaml (issue 12: 50 x 50, both diagonals, no '
+             'bending, swings from two pinned corners, 3 s at 60 Hz): pbd_cloth and Bullet on '
+             'the same links'),
+            (swinging100, 'swinging100', 'config/swinging.yaml at 100 x 100 (issue 12, target '
+             '2): pbd_cloth and Bullet on the same links')):
+        if rows:
+            path = os.path.join(data, 'pareto_%s.png' % name)
+            pareto_figure(rows, swing_metrics, title, path)
+            written.append(path)
     if drape:
         path = os.path.join(data, 'pareto_drape.png')
         pareto_figure(drape, [('max_strain', 'max strain over the run', TARGET),
