@@ -213,12 +213,17 @@ YAML::Node listOf(const MapReader& map, const std::string& name, const char* exp
 // --- Sections ------------------------------------------------------------------------------------
 
 void readSolver(const YAML::Node& node, SolverConfig& s) {
-  const MapReader map(
-      node, "solver",
-      {"method", "substeps", "iterations", "tolerance", "ordering", "relaxation",
-       "jacobi_averaging", "gravity", "damping", "stretch_stiffness", "bend_stiffness",
-       "spring_stiffness", "spring_damping", "bend_spring_stiffness", "levels",
-       "levels_interpolate", "max_speed", "simd", "threads", "sleep_speed", "sleep_time"});
+  const MapReader map(node, "solver", {"method",           "substeps",
+                                       "iterations",       "tolerance",
+                                       "ordering",         "relaxation",
+                                       "jacobi_averaging", "gravity",
+                                       "damping",          "stretch_stiffness",
+                                       "bend_stiffness",   "spring_stiffness",
+                                       "spring_damping",   "bend_spring_stiffness",
+                                       "levels",           "levels_interpolate",
+                                       "max_speed",        "simd",
+                                       "threads",          "sleep_speed",
+                                       "sleep_time"});
   if (map.has("method")) {
     s.method = toWord(map.get("method"), map.keyOf("method"),
                       {Method::kXpbd, Method::kPbd, Method::kVerlet, Method::kMassSpring});
