@@ -30,6 +30,10 @@ using ClockRecorder = Recorder<rosgraph_msgs::Clock>;
 
 // Thousands of /clock messages per second: a queue that holds several seconds of them.
 constexpr uint32_t kClockQueue = 100000;
+// ~state at the publish rate of a node far faster than real time (hundreds a second): with the
+// default 100, a spinner busy with /clock dropped the reset's state (a fresh clone's CI, after the
+// solver got faster).
+constexpr uint32_t kStateQueue = 10000;
 
 // Every stamp of `clocks` in nanoseconds, for exact look-ups.
 std::set<int64_t> clockValues(const std::vector<rosgraph_msgs::Clock>& clocks) {
@@ -56,7 +60,7 @@ TEST(PublishClock, ClockRunsFasterThanWallTimeAndStampsAreItsValues) {
   double min_speed_up = 1.5, max_speed_up = 0.0;
   ros::NodeHandle("~").getParam("min_speed_up", min_speed_up);
   ros::NodeHandle("~").getParam("max_speed_up", max_speed_up);
-  StateRecorder states(node() + "/state");
+  StateRecorder states(node() + "/state", kStateQueue);
   ClockRecorder clocks("/clock", kClockQueue);
   ClothState first;
   ASSERT_TRUE(states.waitForNext(first, 20.0)) << "no ~state";
@@ -99,7 +103,7 @@ TEST(PublishClock, ClockRunsFasterThanWallTimeAndStampsAreItsValues) {
 }
 
 TEST(PublishClock, ResetAnswersAndKeepsTheClockGoingForward) {
-  StateRecorder states(node() + "/state");
+  StateRecorder states(node() + "/state", kStateQueue);
   ClockRecorder clocks("/clock", kClockQueue);
   ClothState before;
   ASSERT_TRUE(states.waitForNext(before, 20.0));
