@@ -238,6 +238,7 @@ class Simulation {
   long slept_steps_ = 0;
   Vec3 sleep_lo_ = Vec3::Zero();
   Vec3 sleep_hi_ = Vec3::Zero();
+  double sleep_margin_ = 0.0;  // m around those bounds where a moving collider wakes the scene
   long sleep_collider_changes_ = 0;
   StepFault last_fault_;
   bool inject_ = false;

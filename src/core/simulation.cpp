@@ -428,10 +428,7 @@ bool Simulation::canSleepThrough() const {
     }
   }
   if (collisions_.colliderChanges() != sleep_collider_changes_) return false;
-  // Within twice the largest contact reach of the particles, a moving collider may touch them.
-  double reach = 0.0;
-  for (double r : particles_.radius) reach = std::max(reach, r);
-  return !collisions_.colliderMovesNear(sleep_lo_, sleep_hi_, 2.0 * reach + 0.01);
+  return !collisions_.colliderMovesNear(sleep_lo_, sleep_hi_, sleep_margin_);
 }
 
 void Simulation::updateSleep(double dt) {
@@ -447,11 +444,15 @@ void Simulation::updateSleep(double dt) {
   if (still_time_ + 1e-12 < scene_.solver.sleep_time || particles_.size() == 0) return;
   asleep_ = true;
   sleep_lo_ = sleep_hi_ = particles_.position[0];
+  double reach = 0.0;
   for (int i = 0; i < particles_.size(); ++i) {
     if (!particles_.isKinematic(i)) particles_.velocity[i].setZero();
     sleep_lo_ = sleep_lo_.cwiseMin(particles_.position[i]);
     sleep_hi_ = sleep_hi_.cwiseMax(particles_.position[i]);
+    reach = std::max(reach, particles_.radius[i]);
   }
+  // Within twice the largest contact reach of the particles, a moving collider may touch them.
+  sleep_margin_ = 2.0 * reach + 0.01;
   sleep_collider_changes_ = collisions_.colliderChanges();
 }
 

@@ -789,8 +789,12 @@ void Solver::step(double dt, Particles& p, const ClothTopology& topology, Collis
     stats_.predict_time += seconds(t0, t1);
 
     // XPBD multipliers start at zero every substep (Small Steps, Algorithm 1).
-    std::fill(stretch_lambda_.begin(), stretch_lambda_.end(), 0.0);
-    std::fill(link_lambda_.begin(), link_lambda_.end(), 0.0);
+    // Only the array this step's stretch projection uses (stretchLambda reads the same one).
+    if (config_.ordering != Ordering::kJacobi && fastStretch(topology)) {
+      std::fill(link_lambda_.begin(), link_lambda_.end(), 0.0);
+    } else {
+      std::fill(stretch_lambda_.begin(), stretch_lambda_.end(), 0.0);
+    }
     std::fill(bend_lambda_.begin(), bend_lambda_.end(), Vec3::Zero());
     for (int pass = 0; pass < config_.iterations; ++pass) {
       ++stats_.iterations;
