@@ -63,8 +63,12 @@ class CoarseLevels {
     // coarse mass): its own, plus its share of every finer particle that follows it. A coarse
     // link weighs its ends by inverse_mass / carried, so the cloth it moves keeps its momentum.
     std::vector<double> carried;
-    std::vector<Link> links;               // row by row
-    StretchLinks flat;                     // the same links, flat and batched (no interpolation)
+    std::vector<Link> links;  // row by row
+    // The same links, flat and batched (no interpolation), between positions in `particles`,
+    // projected on a packed copy of those particles' positions and inverse masses.
+    StretchLinks flat;
+    std::vector<double> compact_position;  // x0 y0 z0 x1 ... of `particles`
+    std::vector<double> compact_inverse_mass;
     std::vector<Interpolated> finer_only;  // the finer level's particles not on this level
   };
   std::vector<Level> levels_;  // levels_[0] = level 1 (the finest coarse level)

@@ -52,6 +52,8 @@ struct StretchLinks {
     kContiguous,   // 4 links: i = i0 + k, j = j0 + k (vertical and diagonal grid links)
     kInterleaved,  // 4 links: i = i0 + 2k, j = i0 + 2k + 1 (horizontal links of one parity)
     kStrided,      // 4 links: i = i0 + 2k, j = j0 + 2k (the single diagonal of every other cell)
+    kCrossed,      // 4 links: i = i0 + k, j = m + (k xor 1) (both diagonals of every other cell,
+                   // main then anti: the j ends are those of kContiguous swapped in pairs)
   };
   struct Segment {
     int begin = 0;

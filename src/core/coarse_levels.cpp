@@ -83,13 +83,16 @@ void CoarseLevels::build(int rows, int cols, double spacing, int levels) {
     // Row by row from the first (the pinned edge of the shipped scenes), and within a row in runs
     // of links that share no particle, as the cloth's own sweep (cloth_builder.cpp): links of even
     // then odd columns, every link down to the next row, both diagonals of even then odd cells.
-    // Consecutive projections are then independent and overlap in the processor.
+    // Consecutive projections are then independent and overlap in the processor, and in the
+    // level's own particle list (row by row) runs of four are whole registers (stretch_links.h).
     for (int a = 0; a < nr; ++a) {
       for (int parity = 0; parity < 2; ++parity) {
         for (int b = parity; b + 1 < nc; b += 2) add(a, b, a, b + 1);
       }
       if (a + 1 == nr) continue;
       for (int b = 0; b < nc; ++b) add(a, b, a + 1, b);
+      // The main diagonals of the row's cells, then the anti-diagonals: each run shares no
+      // particle and steps through both rows one particle at a time (four to a register).
       for (int parity = 0; parity < 2; ++parity) {
         for (int b = parity; b + 1 < nc; b += 2) {
           add(a, b, a + 1, b + 1);
@@ -127,8 +130,12 @@ void CoarseLevels::build(int rows, int cols, double spacing, int levels) {
     }
     std::vector<DistanceConstraint> flat;
     flat.reserve(level.links.size());
-    for (const Link& link : level.links) flat.push_back({link.i, link.j, link.rest_length});
-    level.flat.assign(flat, rows * cols);
+    for (const Link& link : level.links) {
+      flat.push_back({link.local_i, link.local_j, link.rest_length});
+    }
+    level.flat.assign(flat, static_cast<int>(level.particles.size()));
+    level.compact_position.assign(3 * level.particles.size(), 0.0);
+    level.compact_inverse_mass.assign(level.particles.size(), 0.0);
     largest = std::max(largest, level.particles.size());
     finer_carried = level.carried;
     for (std::size_t q = 0; q < level.particles.size(); ++q) {
@@ -143,7 +150,13 @@ void CoarseLevels::build(int rows, int cols, double spacing, int levels) {
 }
 
 void CoarseLevels::prepareStep(const Particles& p) {
-  for (Level& level : levels_) level.flat.prepareStep(p.inverse_mass.data(), 0.0);
+  for (Level& level : levels_) {
+    const int count = static_cast<int>(level.particles.size());
+    for (int q = 0; q < count; ++q) {
+      level.compact_inverse_mass[q] = p.inverse_mass[level.particles[q]];
+    }
+    level.flat.prepareStep(level.compact_inverse_mass.data(), 0.0);
+  }
 }
 
 double CoarseLevels::project(Particles& p, bool interpolate, bool simd) {
@@ -153,16 +166,30 @@ double CoarseLevels::project(Particles& p, bool interpolate, bool simd) {
   }
   double max_change = 0.0;
   for (int k = static_cast<int>(levels_.size()) - 1; k >= 0; --k) {
-    const Level& level = levels_[k];
+    Level& level = levels_[k];
     if (!interpolate) {
       // Each end moves itself: the cloth's own projection (stretch_links.h) with C = max(0, C),
-      // k = 1, no compliance and no multiplier.
+      // k = 1, no compliance and no multiplier, on a packed copy of the level's particles. The
+      // links touch no other particle, so the copy changes no operation (same result as in
+      // place) and lets the level's rows go four links to a register: in the cloth's array a
+      // level's particles lie 2^k apart, and scattered links go one at a time at twice the cost.
+      const int count = static_cast<int>(level.particles.size());
+      double* packed = level.compact_position.data();
+      for (int q = 0; q < count; ++q) {
+        const Vec3& x = p.position[level.particles[q]];
+        packed[3 * q] = x[0];
+        packed[3 * q + 1] = x[1];
+        packed[3 * q + 2] = x[2];
+      }
       StretchProjection how;
       how.unilateral = true;
       how.simd = simd;
       max_change = std::max(max_change, projectStretchLinks(level.flat, 0, level.flat.batchCount(),
-                                                            how, p.position.front().data(), nullptr)
+                                                            how, packed, nullptr)
                                             .max_change);
+      for (int q = 0; q < count; ++q) {
+        p.position[level.particles[q]] = Vec3(packed[3 * q], packed[3 * q + 1], packed[3 * q + 2]);
+      }
       continue;
     }
     // Unilateral: a coarse link only pulls its ends together, never pushes them apart.

@@ -89,6 +89,7 @@ void Solver::prepare(const Particles& particles, const ClothTopology& topology) 
   jacobi_count_.assign(n, 0);
   force_.assign(n, Vec3::Zero());
   predicted_.assign(n, Vec3::Zero());
+  kinematic_velocity_.assign(n, Vec3::Zero());
   kinematic_stretch_.clear();
   kinematic_stretch_.reserve(topology.stretch.size());
   kinematic_bend_.clear();
@@ -172,36 +173,71 @@ double Solver::dampingFactor(double h) const { return std::exp(-config_.damping 
 // increment: a body at rest feels the full g h^2 and a damped link settles at the undamped static
 // stretch (a viscous damper exerts no force at rest; REFERENCE_CASES.md case 6). Kinematic
 // particles take their prescribed position at fraction s_end of the step instead.
+namespace {
+
+// Every particle's prediction of a substep as if it were free (seed: v += h g, x += h v; XPBD
+// Algorithm 1, lines 3-4), on the flat coordinate arrays: one loop with no branch over distinct
+// arrays (restrict), straight vector code, AVX2 where the processor has it (function
+// multiversioning; no FMA either way, so both builds round alike). Solver::predict then puts the
+// kinematic particles back: their velocity as it was, their position on their target; their
+// x~ is never read.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+__attribute__((target_clones("avx2", "default")))
+#endif
+void predictAsFree(int begin, int end, double keep, double h, double dv_x, double dv_y,
+                   double dv_z, double* __restrict x, double* __restrict v,
+                   double* __restrict start, double* __restrict predicted) {
+  // Four particles (twelve coordinates, three AVX2 registers) at a time, the rest one by one.
+  const double dv[12] = {dv_x, dv_y, dv_z, dv_x, dv_y, dv_z, dv_x, dv_y, dv_z, dv_x, dv_y, dv_z};
+  auto advance = [&](int k, int q) {
+    start[k] = x[k];
+    v[k] = keep * v[k] + dv[q];
+    x[k] += h * v[k];
+    predicted[k] = x[k];
+  };
+  int i = begin;
+  for (; i + 4 <= end; i += 4) {
+    for (int q = 0; q < 12; ++q) advance(3 * i + q, q);
+  }
+  for (; i < end; ++i) {
+    for (int d = 0; d < 3; ++d) advance(3 * i + d, d);
+  }
+}
+
+// v <- v + (x - x~) / h over flat coordinates [begin, end) (XPBD Algorithm 1, line 11, written as
+// a change of velocity: the same as (x - x_prev) / h up to rounding, and exact for a free
+// particle no constraint moved). Vectorized as predictAsFree.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+__attribute__((target_clones("avx2", "default")))
+#endif
+void updateAsFree(int begin, int end, double inv_h, const double* __restrict x,
+                  const double* __restrict predicted, double* __restrict v) {
+  for (int k = begin; k < end; ++k) v[k] += (x[k] - predicted[k]) * inv_h;
+}
+
+}  // namespace
+
 void Solver::predict(double h, double s_end, Particles& p) {
   const int n = p.size();
   if (n == 0) return;
   const double keep = dampingFactor(h);
   const Vec3 dv = h * config_.gravity;
   const int threads = pool_.threads();
-  // On the flat coordinate arrays, one particle's three in a row: the loop the compiler turns into
-  // straight vector code. Threads take equal ranges of particles (each particle on its own).
+  // Threads take equal ranges of particles (each particle on its own).
   auto job = [&](int t) {
     const int begin = static_cast<int>(static_cast<long>(n) * t / threads);
     const int end = static_cast<int>(static_cast<long>(n) * (t + 1) / threads);
-    double* x = p.position.front().data();
-    double* v = p.velocity.front().data();
-    double* start = p.substep_start.front().data();
-    double* predicted = predicted_.front().data();
     const double* w = p.inverse_mass.data();
     for (int i = begin; i < end; ++i) {
-      for (int d = 0; d < 3; ++d) {
-        const int k = 3 * i + d;
-        start[k] = x[k];
-        if (w[i] == 0.0) continue;
-        v[k] = keep * v[k] + dv[d];
-        x[k] += h * v[k];
-        predicted[k] = x[k];
-      }
+      if (w[i] == 0.0) kinematic_velocity_[i] = p.velocity[i];
     }
+    predictAsFree(begin, end, keep, h, dv[0], dv[1], dv[2], p.position.front().data(),
+                  p.velocity.front().data(), p.substep_start.front().data(),
+                  predicted_.front().data());
     for (int i = begin; i < end; ++i) {
-      if (w[i] == 0.0) {
-        p.position[i] = (1.0 - s_end) * p.kinematic_from[i] + s_end * p.kinematic_to[i];
-      }
+      if (w[i] != 0.0) continue;
+      p.velocity[i] = kinematic_velocity_[i];
+      p.position[i] = (1.0 - s_end) * p.kinematic_from[i] + s_end * p.kinematic_to[i];
     }
   };
   pool_.run(job);
@@ -599,15 +635,12 @@ void Solver::updateVelocities(double h, Particles& p) {
   auto job = [&](int t) {
     const int begin = static_cast<int>(static_cast<long>(n) * t / threads);
     const int end = static_cast<int>(static_cast<long>(n) * (t + 1) / threads);
-    const double* x = p.position.front().data();
-    const double* start = p.substep_start.front().data();
-    const double* predicted = predicted_.front().data();
-    const double* w = p.inverse_mass.data();
-    double* v = p.velocity.front().data();
+    updateAsFree(3 * begin, 3 * end, inv_h, p.position.front().data(), predicted_.front().data(),
+                 p.velocity.front().data());
+    // A kinematic particle's velocity is the one it moved with: (x - x_start) / h.
     for (int i = begin; i < end; ++i) {
-      for (int d = 0; d < 3; ++d) {
-        const int k = 3 * i + d;
-        v[k] = w[i] == 0.0 ? (x[k] - start[k]) * inv_h : v[k] + (x[k] - predicted[k]) * inv_h;
+      if (p.inverse_mass[i] == 0.0) {
+        p.velocity[i] = (p.position[i] - p.substep_start[i]) * inv_h;
       }
     }
   };

@@ -184,6 +184,21 @@ PBD_AVX2 void projectAvx2(const StretchLinks& links, int first_batch, int end_ba
         }
         break;
       }
+      case StretchLinks::Layout::kCrossed: {
+        // j ends m+1, m, m+3, m+2: four from m, swapped within each pair (lane order 1 0 3 2).
+        double* pm = x + 3 * links.j[c + 1];
+        __m256d a[3], b[3];
+        loadFour(pa, a[0], a[1], a[2]);
+        loadFour(pm, b[0], b[1], b[2]);
+        for (int d = 0; d < 3; ++d) b[d] = _mm256_permute_pd(b[d], 0x5);
+        done = projectFour(c, links, how, lambda, a, b, max_change);
+        if (done) {
+          for (int d = 0; d < 3; ++d) b[d] = _mm256_permute_pd(b[d], 0x5);
+          storeFour(pa, a[0], a[1], a[2]);
+          storeFour(pm, b[0], b[1], b[2]);
+        }
+        break;
+      }
       case StretchLinks::Layout::kInterleaved: {
         EightParticles e;
         loadEight(pa, e);
@@ -335,17 +350,23 @@ void StretchPassResult::merge(const StretchPassResult& other) {
 void StretchLinks::findSegments(int particle_count) {
   auto layoutAt = [&](int c) {
     const int i0 = i[c], j0 = j[c];
-    bool contiguous = true, strided = true, interleaved = true;
+    bool contiguous = true, strided = true, interleaved = true, crossed = true;
+    const int m = j[c + 1];  // kCrossed: the first of the four j ends in memory
     for (int k = 1; k < 4; ++k) {
       contiguous = contiguous && i[c + k] == i0 + k && j[c + k] == j0 + k;
       strided = strided && i[c + k] == i0 + 2 * k && j[c + k] == j0 + 2 * k;
     }
+    for (int k = 0; k < 4; ++k) crossed = crossed && i[c + k] == i0 + k && j[c + k] == m + (k ^ 1);
     interleaved = strided && j0 == i0 + 1;
     const int gap = std::abs(j0 - i0);
     auto fits = [&](int width) {
       return i0 >= 0 && j0 >= 0 && i0 + width <= particle_count && j0 + width <= particle_count;
     };
     if (contiguous && gap >= 4 && fits(4)) return Layout::kContiguous;
+    if (crossed && std::abs(m - i0) >= 4 && i0 >= 0 && m >= 0 && i0 + 4 <= particle_count &&
+        m + 4 <= particle_count) {
+      return Layout::kCrossed;
+    }
     if (interleaved && fits(8)) return Layout::kInterleaved;
     if (strided && gap >= 8 && fits(8)) return Layout::kStrided;
     return Layout::kScalar;

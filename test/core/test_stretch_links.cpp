@@ -138,6 +138,45 @@ TEST(StretchLinks, CoincidentEndsInsideARegisterGroupAreReportedByIndex) {
   }
 }
 
+// Both diagonals of every other cell of a strip, main then anti per cell (the coarse levels'
+// order): i steps by one, j by one swapped in pairs (kCrossed), and the register path moves every
+// particle as the link-by-link loop does, to the bit.
+TEST(StretchLinks, CrossedDiagonalsLoadAsWholeRegisters) {
+  const int cols = 9;  // a 2 x 9 strip: cells 0, 2, 4, 6 of its one row
+  std::vector<DistanceConstraint> list;
+  for (int c = 0; c + 1 < cols; c += 2) {
+    list.push_back({c, cols + c + 1, std::sqrt(2.0)});  // main diagonal
+    list.push_back({c + 1, cols + c, std::sqrt(2.0)});  // anti-diagonal
+  }
+  StretchLinks links;
+  links.assign(list, 2 * cols);
+  ASSERT_EQ(links.batchCount(), 1);
+  ASSERT_EQ(links.segments.size(), 2u);
+  for (const StretchLinks::Segment& segment : links.segments) {
+    EXPECT_EQ(segment.layout, StretchLinks::Layout::kCrossed);
+  }
+  Vec3Array start(2 * cols);
+  for (int k = 0; k < 2 * cols; ++k) {
+    // Stretched and skewed, differently for every particle.
+    start[k] = Vec3(1.3 * (k % cols) + 0.01 * k * k, (k / cols) * 1.7, 0.05 * k);
+  }
+  std::vector<double> inverse_mass(2 * cols, 1.0);
+  inverse_mass[3] = 0.0;  // one kinematic end
+  links.prepareStep(inverse_mass.data(), 0.0);
+  Vec3Array result[2] = {start, start};
+  for (bool simd : {true, false}) {
+    std::vector<double> lambda(list.size(), 0.0);
+    StretchProjection how;
+    how.simd = simd;
+    projectStretchLinks(links, 0, 1, how, result[simd].front().data(), lambda.data());
+  }
+  EXPECT_EQ(result[0], result[1]);
+  EXPECT_EQ(result[1][3], start[3]);
+  for (const DistanceConstraint& link : list) {
+    EXPECT_NEAR((result[1][link.i] - result[1][link.j]).norm(), link.rest_length, 1e-12);
+  }
+}
+
 // A link with both ends kinematic is skipped: nothing moves and its multiplier stays zero.
 TEST(StretchLinks, LinksWithoutAFreeEndAreSkipped) {
   std::vector<DistanceConstraint> list = {{0, 1, 1.0}};
