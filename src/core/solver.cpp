@@ -4,6 +4,8 @@
 #include <chrono>
 #include <cmath>
 
+#include "pbd_cloth/flat_hinges.h"
+
 namespace pbd_cloth {
 
 namespace {
@@ -398,22 +400,13 @@ double Solver::projectBend(double h, Particles& p, const ClothTopology& topology
 // one per pass and no per-vertex weight arithmetic.
 double Solver::projectFlatBend(Particles& p, const ClothTopology& topology, double alpha,
                                double k) {
-  const int count = static_cast<int>(topology.bend.size());
-  double largest_sq = 0.0;
-  for (int c = 0; c < count; ++c) {
-    const double inverse_denominator = bend_inverse_denominator_[c];
-    if (inverse_denominator == 0.0) continue;
-    const BendConstraint& con = topology.bend[c];
-    const Vec3 constraint = con.scale * bendVector(con, p);
-    const Vec3 dlambda = (-k * constraint - alpha * bend_lambda_[c]) * inverse_denominator;
-    bend_lambda_[c] += dlambda;
-    const Vec3 direction = con.scale * dlambda;
-    const double* factor = &bend_factor_[4 * c];
-    for (int v = 0; v < 4; ++v) p.position[con.index[v]] += factor[v] * direction;
-    largest_sq = std::max(
-        largest_sq, bend_largest_factor_[c] * bend_largest_factor_[c] * direction.squaredNorm());
-  }
-  return std::sqrt(largest_sq);
+  FlatHingeStep step;
+  step.inverse_denominator = bend_inverse_denominator_.data();
+  step.factor = bend_factor_.data();
+  step.largest_factor = bend_largest_factor_.data();
+  return projectFlatHinges(topology.bend.data(), static_cast<int>(topology.bend.size()), step, k,
+                           alpha, config_.simd, p.position.front().data(),
+                           bend_lambda_.front().data());
 }
 
 void Solver::prepareBendStep(const Particles& p, const ClothTopology& topology, double h) {
