@@ -268,6 +268,9 @@ def fabric_runs(quick):
             runs.append(pbd_run('fabric', 'fabric_table.yaml', curve, 'xpbd', 12, 1, duration,
                                 ['cloth.self_collision=%s' % self_collision,
                                  'solver.threads=%d' % threads]))
+    # The same without the AVX2 paths (links and flat hinges): what SIMD buys on this scene.
+    runs.append(pbd_run('fabric', 'fabric_table.yaml', 'xpbd, portable loop', 'xpbd', 12, 1,
+                        duration, ['cloth.self_collision=false', 'solver.simd=false']))
     return runs
 
 

@@ -130,6 +130,9 @@ class Collisions {
   // have moved them by, times their mass. The solver turns it into their constraint force.
   // (Obstacles and bounds leave kinematic particles alone.)
   const Vec3Array& kinematicReaction() const { return kinematic_reaction_; }
+  // Threads for the self-collision broad phase (the solver's, solver.threads; nullptr: this
+  // thread alone). The pairs found are the same for every count.
+  void setWorkerPool(WorkerPool* pool) { pool_ = pool; }
   // Largest speed at which pre-existing overlaps are separated (m/s), 1 by default.
   void setMaxSeparationSpeed(double speed) { max_separation_speed_ = speed; }
 
@@ -183,6 +186,7 @@ class Collisions {
   Vec3Array box_hi_;
   ParticleContacts particle_contacts_;
   SelfCollision self_collision_pairs_;
+  WorkerPool* pool_ = nullptr;
   CollisionStats stats_;
   Vec3Array kinematic_reaction_;
 };

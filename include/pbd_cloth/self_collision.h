@@ -29,6 +29,7 @@
 #include "pbd_cloth/contact.h"
 #include "pbd_cloth/particles.h"
 #include "pbd_cloth/spatial_hash.h"
+#include "pbd_cloth/worker_pool.h"
 
 namespace pbd_cloth {
 
@@ -53,8 +54,13 @@ class SelfCollision {
   // box) passes edge_pairs = false: it renews the vertex-triangle pairs, the primary contacts, and
   // keeps the edge-edge pairs of the step start, whose search costs several times more; a
   // vertex-triangle pair found again keeps its side and contact state.
+  // With a pool of more than one thread (solver.threads): at the step start the two searches run
+  // side by side on two threads, each with its own hash; a repeated search splits the vertices'
+  // queries into ranges, each thread listing its range's pairs, joined in range order. Either
+  // way the same pairs in the same order as one thread finds them.
   void findPairs(const Particles& particles, const ClothTopology& topology, const Vec3Array& lo,
-                 const Vec3Array& hi, double thickness, bool edge_pairs);
+                 const Vec3Array& hi, double thickness, bool edge_pairs,
+                 WorkerPool* pool = nullptr);
 
   // Pre-stabilisation: pushes contacts closer than h by more than the slop (a fraction of h) apart
   // by at most max_shift, on the positions before the step's first prediction (no velocity).
@@ -81,9 +87,16 @@ class SelfCollision {
   int edgeEdgePairCount() const { return edge_pair_count_; }
 
  private:
-  void findVertexTrianglePairs(const Particles& particles, const ClothTopology& topology);
+  // Each appends its pairs to `found`; a pool of more than one thread splits the search into
+  // ranges (threads' lists joined in range order).
+  void findVertexTrianglePairs(const Particles& particles, const ClothTopology& topology,
+                               WorkerPool* pool, std::vector<SelfContactPair>& found);
   void carryVertexTriangleStates();
-  void findEdgeEdgePairs(const Particles& particles, const ClothTopology& topology);
+  void findEdgeEdgePairs(const Particles& particles, const ClothTopology& topology,
+                         WorkerPool* pool, std::vector<SelfContactPair>& found);
+  // Threads' lists, appended to `found` in thread order (their capacity is kept between steps).
+  void sizeThreadLists(int threads);
+  void joinThreadLists(int threads, std::vector<SelfContactPair>& found);
 
   std::vector<std::array<int, 2>> edges_;
   SpatialHash triangle_hash_;
@@ -98,6 +111,8 @@ class SelfCollision {
   std::vector<SelfContactPair> pairs_;  // edge-edge pairs first, then vertex-triangle pairs
   int edge_pair_count_ = 0;
   std::vector<SelfContactPair> previous_;  // vertex-triangle pairs before a search within the step
+  std::vector<std::vector<SelfContactPair>> thread_pairs_;
+  std::vector<SelfContactPair> vertex_found_;  // step start with threads: found beside the edges
 };
 
 }  // namespace pbd_cloth

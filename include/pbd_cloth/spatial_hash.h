@@ -4,6 +4,7 @@
 // flat arrays, so once the buffers have grown to the scene's needs a build allocates nothing.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -39,7 +40,17 @@ class SpatialHash {
   // Calls visit(a, b) exactly once for every pair of filed items whose boxes overlap (a self-join
   // cell by cell: cheaper than one query per item when the items are the queries too).
   template <class Visit>
-  void forEachOverlappingPair(Visit&& visit) const;
+  void forEachOverlappingPair(Visit&& visit) const {
+    forEachOverlappingPairIn(0, bucketCount(), true, visit);
+  }
+  // The same for the pairs of buckets [first_bucket, end_bucket) only, and with `overflow` those
+  // of the boxes too long to be filed (reported first). Ranges that cover the buckets once, the
+  // first with `overflow`, report every pair once, in the order of the whole self-join when run
+  // in order (threads each take a range, solver.threads).
+  template <class Visit>
+  void forEachOverlappingPairIn(std::size_t first_bucket, std::size_t end_bucket, bool overflow,
+                                Visit&& visit) const;
+  std::size_t bucketCount() const { return bucket_start_.empty() ? 0 : bucket_start_.size() - 1; }
 
   static constexpr int kMaxCellsPerItem = 64;
 
@@ -116,17 +127,20 @@ void SpatialHash::forEachOverlapping(const Vec3& lo, const Vec3& hi, Visit&& vis
 }
 
 template <class Visit>
-void SpatialHash::forEachOverlappingPair(Visit&& visit) const {
+void SpatialHash::forEachOverlappingPairIn(std::size_t first_bucket, std::size_t end_bucket,
+                                           bool overflow, Visit&& visit) const {
   // Boxes too long to be filed meet every other box through a query of their own.
-  for (int a : overflow_) {
-    forEachOverlapping(lo_[a], hi_[a], [&](int b) {
-      if (b != a && !(cellsSpanned(lo_cell_[b], cellOf(hi_[b])) > kMaxCellsPerItem && b < a)) {
-        visit(a, b);
-      }
-    });
+  if (overflow) {
+    for (int a : overflow_) {
+      forEachOverlapping(lo_[a], hi_[a], [&](int b) {
+        if (b != a && !(cellsSpanned(lo_cell_[b], cellOf(hi_[b])) > kMaxCellsPerItem && b < a)) {
+          visit(a, b);
+        }
+      });
+    }
   }
-  const std::size_t buckets = bucket_start_.size() - 1;
-  for (std::size_t bucket = 0; bucket < buckets; ++bucket) {
+  const std::size_t buckets = std::min(end_bucket, bucketCount());
+  for (std::size_t bucket = first_bucket; bucket < buckets; ++bucket) {
     const int end = bucket_start_[bucket + 1];
     for (int s = bucket_start_[bucket]; s < end; ++s) {
       const Entry& first = entries_[s];

@@ -86,7 +86,7 @@ struct StretchLinks {
   void prepareStep(const double* inverse_mass, double alpha);
 
  private:
-  void findSegments(int particle_count);
+  void findSegments(int particle_count, int grid_rows, int grid_cols);
 };
 
 // How a call projects its links. Stretch constraint: C = |x_i - x_j| - l0, multiplier step

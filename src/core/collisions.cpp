@@ -172,7 +172,8 @@ void Collisions::findCandidates(const Particles& particles, const ClothTopology&
     particle_contacts_.findPairs(particles, box_lo_, box_hi_, !step_start);
   }
   if (selfCollisionActive(topology)) {
-    self_collision_pairs_.findPairs(particles, topology, box_lo_, box_hi_, thickness_, step_start);
+    self_collision_pairs_.findPairs(particles, topology, box_lo_, box_hi_, thickness_, step_start,
+                                    pool_);
   }
   stats_.particle_pairs = particle_contacts_.pairCount();
   const bool self_collision = selfCollisionActive(topology);

@@ -153,7 +153,7 @@ std::size_t SelfCollision::releaseExcessCapacity() {
 
 void SelfCollision::findPairs(const Particles& p, const ClothTopology& topology,
                               const Vec3Array& lo, const Vec3Array& hi, double thickness,
-                              bool edge_pairs) {
+                              bool edge_pairs, WorkerPool* pool) {
   // Edge-edge pairs first, vertex-triangle pairs after them: a repeated broad phase within the
   // step replaces only the latter, and keeps the old ones aside to hand their states on.
   if (!edge_pairs) previous_.assign(pairs_.begin() + edge_pair_count_, pairs_.end());
@@ -169,11 +169,25 @@ void SelfCollision::findPairs(const Particles& p, const ClothTopology& topology,
     grown_lo_[v] = lo[v].array() - half;
     grown_hi_[v] = hi[v].array() + half;
   }
+  const int threads = pool != nullptr ? pool->threads() : 1;
+  if (edge_pairs && threads >= 2) {
+    // The two searches side by side, each on one thread with its own hash: edge-edge pairs
+    // straight into the list, vertex-triangle pairs into their own, appended after them.
+    vertex_found_.clear();
+    auto job = [&](int t) {
+      if (t == 0) findVertexTrianglePairs(p, topology, nullptr, vertex_found_);
+      if (t == 1) findEdgeEdgePairs(p, topology, nullptr, pairs_);
+    };
+    pool->run(job);
+    edge_pair_count_ = static_cast<int>(pairs_.size());
+    pairs_.insert(pairs_.end(), vertex_found_.begin(), vertex_found_.end());
+    return;
+  }
   if (edge_pairs) {
-    findEdgeEdgePairs(p, topology);
+    findEdgeEdgePairs(p, topology, pool, pairs_);
     edge_pair_count_ = static_cast<int>(pairs_.size());
   }
-  findVertexTrianglePairs(p, topology);
+  findVertexTrianglePairs(p, topology, pool, pairs_);
   if (!edge_pairs) carryVertexTriangleStates();
 }
 
@@ -197,7 +211,19 @@ void SelfCollision::carryVertexTriangleStates() {
 
 // Triangles are hashed (each in the cells its box covers) and every vertex queries its small
 // box: fewer, shorter queries than the other way round. The cell is the mean triangle box.
-void SelfCollision::findVertexTrianglePairs(const Particles& p, const ClothTopology& topology) {
+void SelfCollision::sizeThreadLists(int threads) {
+  if (static_cast<int>(thread_pairs_.size()) < threads) thread_pairs_.resize(threads);
+  for (int t = 0; t < threads; ++t) thread_pairs_[t].clear();
+}
+
+void SelfCollision::joinThreadLists(int threads, std::vector<SelfContactPair>& found) {
+  for (int t = 0; t < threads; ++t) {
+    found.insert(found.end(), thread_pairs_[t].begin(), thread_pairs_[t].end());
+  }
+}
+
+void SelfCollision::findVertexTrianglePairs(const Particles& p, const ClothTopology& topology,
+                                            WorkerPool* pool, std::vector<SelfContactPair>& found) {
   const auto& tri = topology.triangles;
   const int triangles = topology.triangleCount();
   triangle_lo_.resize(triangles);
@@ -211,7 +237,7 @@ void SelfCollision::findVertexTrianglePairs(const Particles& p, const ClothTopol
   }
   if (!(cell > 0.0) || !std::isfinite(cell)) return;
   triangle_hash_.build(triangle_lo_, triangle_hi_, triangles, cell);
-  for (int v = 0; v < p.cloth_count; ++v) {
+  auto query = [&](int v, std::vector<SelfContactPair>& into) {
     triangle_hash_.forEachOverlapping(grown_lo_[v], grown_hi_[v], [&](int t) {
       const int a = static_cast<int>(tri[3 * t]), b = static_cast<int>(tri[3 * t + 1]),
                 c = static_cast<int>(tri[3 * t + 2]);
@@ -227,12 +253,27 @@ void SelfCollision::findVertexTrianglePairs(const Particles& p, const ClothTopol
       pair.index[2] = b;
       pair.index[3] = c;
       pair.side = start.distance >= 0.0 ? 1.0 : -1.0;
-      pairs_.push_back(pair);
+      into.push_back(pair);
     });
+  };
+  const int threads = pool != nullptr ? pool->threads() : 1;
+  if (threads == 1) {
+    for (int v = 0; v < p.cloth_count; ++v) query(v, found);
+    return;
   }
+  // Threads take consecutive ranges of vertices: joined in order, the list is the one above.
+  sizeThreadLists(threads);
+  auto job = [&](int t) {
+    const int begin = static_cast<int>(static_cast<long>(p.cloth_count) * t / threads);
+    const int end = static_cast<int>(static_cast<long>(p.cloth_count) * (t + 1) / threads);
+    for (int v = begin; v < end; ++v) query(v, thread_pairs_[t]);
+  };
+  pool->run(job);
+  joinThreadLists(threads, found);
 }
 
-void SelfCollision::findEdgeEdgePairs(const Particles& p, const ClothTopology& topology) {
+void SelfCollision::findEdgeEdgePairs(const Particles& p, const ClothTopology& topology,
+                                      WorkerPool* pool, std::vector<SelfContactPair>& found) {
   // Edges of one grid cell or of neighbouring cells (some end points within one row and column)
   // are left out: nearly coplanar while the cloth is smooth, they would get a side by chance, and
   // folding them onto each other is already stopped by the vertex-triangle contacts.
@@ -256,7 +297,7 @@ void SelfCollision::findEdgeEdgePairs(const Particles& p, const ClothTopology& t
   }
   if (!(cell > 0.0) || !std::isfinite(cell)) return;
   edge_hash_.build(edge_lo_, edge_hi_, edges, cell);
-  edge_hash_.forEachOverlappingPair([&](int e, int f) {
+  auto keep = [&](int e, int f, std::vector<SelfContactPair>& into) {
     const int a = edges_[e][0], b = edges_[e][1], c = edges_[f][0], d = edges_[f][1];
     if (near(a, c) || near(a, d) || near(b, c) || near(b, d) || allKinematic(p, a, b, c, d)) {
       return;
@@ -271,8 +312,24 @@ void SelfCollision::findEdgeEdgePairs(const Particles& p, const ClothTopology& t
     if (geometry(pair, p.step_start, start) && start.distance != 0.0) {
       pair.side = start.distance > 0.0 ? 1.0 : -1.0;
     }
-    pairs_.push_back(pair);
-  });
+    into.push_back(pair);
+  };
+  const int threads = pool != nullptr ? pool->threads() : 1;
+  if (threads == 1) {
+    edge_hash_.forEachOverlappingPair([&](int e, int f) { keep(e, f, found); });
+    return;
+  }
+  // Threads take consecutive ranges of the hash's buckets, the first also the overflow boxes:
+  // joined in order, the list is the one of the whole self-join above.
+  sizeThreadLists(threads);
+  const std::size_t buckets = edge_hash_.bucketCount();
+  auto job = [&](int t) {
+    const std::size_t first = buckets * t / threads, end = buckets * (t + 1) / threads;
+    edge_hash_.forEachOverlappingPairIn(first, end, t == 0,
+                                        [&](int e, int f) { keep(e, f, thread_pairs_[t]); });
+  };
+  pool->run(job);
+  joinThreadLists(threads, found);
 }
 
 void SelfCollision::preStabilize(Particles& p, double thickness, double max_shift,

@@ -179,16 +179,19 @@ namespace {
 
 // Every particle's prediction of a substep as if it were free (seed: v += h g, x += h v; XPBD
 // Algorithm 1, lines 3-4), on the flat coordinate arrays: one loop with no branch over distinct
-// arrays (restrict), straight vector code, AVX2 where the processor has it (function
-// multiversioning; no FMA either way, so both builds round alike). Solver::predict then puts the
-// kinematic particles back: their velocity as it was, their position on their target; their
-// x~ is never read.
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-__attribute__((target_clones("avx2", "default")))
+// arrays (restrict), straight vector code. Solver::predict then puts the kinematic particles
+// back: their velocity as it was, their position on their target; their x~ is never read.
+// The body is inlined into two builds, AVX2 and the baseline, chosen at run time as the stretch
+// links' (stretch_links.h; not function multiversioning, whose load-time resolvers the sanitizer
+// builds cannot run); no FMA in either, so both round alike.
+#if defined(__GNUC__)
+#define PBD_INLINE inline __attribute__((always_inline))
+#else
+#define PBD_INLINE inline
 #endif
-void predictAsFree(int begin, int end, double keep, double h, double dv_x, double dv_y,
-                   double dv_z, double* __restrict x, double* __restrict v,
-                   double* __restrict start, double* __restrict predicted) {
+PBD_INLINE void predictAsFree(int begin, int end, double keep, double h, double dv_x, double dv_y,
+                              double dv_z, double* __restrict x, double* __restrict v,
+                              double* __restrict start, double* __restrict predicted) {
   // Four particles (twelve coordinates, three AVX2 registers) at a time, the rest one by one.
   const double dv[12] = {dv_x, dv_y, dv_z, dv_x, dv_y, dv_z, dv_x, dv_y, dv_z, dv_x, dv_y, dv_z};
   auto advance = [&](int k, int q) {
@@ -208,13 +211,47 @@ void predictAsFree(int begin, int end, double keep, double h, double dv_x, doubl
 
 // v <- v + (x - x~) / h over flat coordinates [begin, end) (XPBD Algorithm 1, line 11, written as
 // a change of velocity: the same as (x - x_prev) / h up to rounding, and exact for a free
-// particle no constraint moved). Vectorized as predictAsFree.
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-__attribute__((target_clones("avx2", "default")))
-#endif
-void updateAsFree(int begin, int end, double inv_h, const double* __restrict x,
-                  const double* __restrict predicted, double* __restrict v) {
+// particle no constraint moved). Built twice as predictAsFree.
+PBD_INLINE void updateAsFree(int begin, int end, double inv_h, const double* __restrict x,
+                             const double* __restrict predicted, double* __restrict v) {
   for (int k = begin; k < end; ++k) v[k] += (x[k] - predicted[k]) * inv_h;
+}
+
+struct PredictArgs {
+  int begin, end;
+  double keep, h, dv_x, dv_y, dv_z;
+  double *x, *v, *start, *predicted;
+};
+
+#if defined(__x86_64__) && defined(__GNUC__)
+__attribute__((target("avx2"))) void predictAvx2(const PredictArgs& a) {
+  predictAsFree(a.begin, a.end, a.keep, a.h, a.dv_x, a.dv_y, a.dv_z, a.x, a.v, a.start,
+                a.predicted);
+}
+__attribute__((target("avx2"))) void updateAvx2(int begin, int end, double inv_h, const double* x,
+                                                const double* predicted, double* v) {
+  updateAsFree(begin, end, inv_h, x, predicted, v);
+}
+#endif
+
+void predictFree(const PredictArgs& a, bool avx2) {
+#if defined(__x86_64__) && defined(__GNUC__)
+  if (avx2) return predictAvx2(a);
+#else
+  (void)avx2;
+#endif
+  predictAsFree(a.begin, a.end, a.keep, a.h, a.dv_x, a.dv_y, a.dv_z, a.x, a.v, a.start,
+                a.predicted);
+}
+
+void updateFree(int begin, int end, double inv_h, const double* x, const double* predicted,
+                double* v, bool avx2) {
+#if defined(__x86_64__) && defined(__GNUC__)
+  if (avx2) return updateAvx2(begin, end, inv_h, x, predicted, v);
+#else
+  (void)avx2;
+#endif
+  updateAsFree(begin, end, inv_h, x, predicted, v);
 }
 
 }  // namespace
@@ -225,6 +262,7 @@ void Solver::predict(double h, double s_end, Particles& p) {
   const double keep = dampingFactor(h);
   const Vec3 dv = h * config_.gravity;
   const int threads = pool_.threads();
+  const bool avx2 = config_.simd && stretchLinksUseAvx2();
   // Threads take equal ranges of particles (each particle on its own).
   auto job = [&](int t) {
     const int begin = static_cast<int>(static_cast<long>(n) * t / threads);
@@ -233,9 +271,10 @@ void Solver::predict(double h, double s_end, Particles& p) {
     for (int i = begin; i < end; ++i) {
       if (w[i] == 0.0) kinematic_velocity_[i] = p.velocity[i];
     }
-    predictAsFree(begin, end, keep, h, dv[0], dv[1], dv[2], p.position.front().data(),
-                  p.velocity.front().data(), p.substep_start.front().data(),
-                  predicted_.front().data());
+    predictFree(
+        {begin, end, keep, h, dv[0], dv[1], dv[2], p.position.front().data(),
+         p.velocity.front().data(), p.substep_start.front().data(), predicted_.front().data()},
+        avx2);
     for (int i = begin; i < end; ++i) {
       if (w[i] != 0.0) continue;
       p.velocity[i] = kinematic_velocity_[i];
@@ -625,11 +664,12 @@ void Solver::updateVelocities(double h, Particles& p) {
   if (n == 0) return;
   const double inv_h = 1.0 / h;
   const int threads = pool_.threads();
+  const bool avx2 = config_.simd && stretchLinksUseAvx2();
   auto job = [&](int t) {
     const int begin = static_cast<int>(static_cast<long>(n) * t / threads);
     const int end = static_cast<int>(static_cast<long>(n) * (t + 1) / threads);
-    updateAsFree(3 * begin, 3 * end, inv_h, p.position.front().data(), predicted_.front().data(),
-                 p.velocity.front().data());
+    updateFree(3 * begin, 3 * end, inv_h, p.position.front().data(), predicted_.front().data(),
+               p.velocity.front().data(), avx2);
     // A kinematic particle's velocity is the one it moved with: (x - x_start) / h.
     for (int i = begin; i < end; ++i) {
       if (p.inverse_mass[i] == 0.0) {
@@ -793,6 +833,7 @@ void Solver::step(double dt, Particles& p, const ClothTopology& topology, Collis
   // Find contacts at the step start; every substep enforces them (Jolt's "collide" phase).
   // Collisions::project searches again in a substep whose prediction left the swept boxes.
   auto t0 = Clock::now();
+  collisions.setWorkerPool(pool_.threads() > 1 ? &pool_ : nullptr);
   collisions.beginStep(p, topology, dt);
   auto t1 = Clock::now();
   stats_.collide_time += seconds(t0, t1);
@@ -837,6 +878,7 @@ void Solver::step(double dt, Particles& p, const ClothTopology& topology, Collis
 
   finishReactions(dt, h, p, collisions);
   collisions.endStep();
+  collisions.setWorkerPool(nullptr);  // lent for the step only
   stats_.sim_time += dt;
   stats_.degenerate_constraints = degenerate_in_pass_;
   stats_.first_degenerate_constraint = first_degenerate_in_pass_;

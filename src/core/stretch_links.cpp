@@ -333,7 +333,7 @@ void StretchLinks::assign(const std::vector<DistanceConstraint>& links, int part
   inverse_mass_i.assign(count, 0.0);
   inverse_mass_j.assign(count, 0.0);
   inverse_denominator.assign(count, 0.0);
-  findSegments(particle_count);
+  findSegments(particle_count, tasks > 1 ? grid_rows : 0, tasks > 1 ? grid_cols : 0);
 }
 
 void StretchPassResult::merge(const StretchPassResult& other) {
@@ -347,7 +347,18 @@ void StretchPassResult::merge(const StretchPassResult& other) {
 // The register layout of four links from c, if they have one: the particles each register
 // touches (4 or 8 from i0, 4 or 8 from j0) must lie inside the particles, and the two windows
 // must not overlap (or be the same window, interleaved).
-void StretchLinks::findSegments(int particle_count) {
+// A strided window loads and stores eight particles of which its links use every other one: the
+// four between are written back as they were read. With threads (tasks of grid rows, grid_cols >
+// 0) another task may move those meanwhile, and the store would undo its move: a strided window
+// must then lie in one grid row, which no other task of its phase touches (tasks hold different
+// rows; seams are a block apart).
+void StretchLinks::findSegments(int particle_count, int grid_rows, int grid_cols) {
+  const int grid_size = grid_rows * grid_cols;
+  auto oneRow = [&](int first, int count) {
+    if (grid_cols <= 0) return true;  // one task: nothing runs beside it
+    const int last = first + count - 1;
+    return first < grid_size && last < grid_size && first / grid_cols == last / grid_cols;
+  };
   auto layoutAt = [&](int c) {
     const int i0 = i[c], j0 = j[c];
     bool contiguous = true, strided = true, interleaved = true, crossed = true;
@@ -368,7 +379,9 @@ void StretchLinks::findSegments(int particle_count) {
       return Layout::kCrossed;
     }
     if (interleaved && fits(8)) return Layout::kInterleaved;
-    if (strided && gap >= 8 && fits(8)) return Layout::kStrided;
+    if (strided && gap >= 8 && fits(8) && oneRow(i0, 8) && oneRow(j0, 8)) {
+      return Layout::kStrided;
+    }
     return Layout::kScalar;
   };
   for (int b = 0; b < batchCount(); ++b) {

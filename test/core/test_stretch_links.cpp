@@ -193,6 +193,71 @@ TEST(StretchLinks, LinksWithoutAFreeEndAreSkipped) {
   EXPECT_EQ(result.degenerate, 0);
 }
 
+// What a task's registers load and store (every particle of each window, used or not) is touched
+// by no other task of its phase: a window that reached into another task's particles would write
+// back values that task may have moved meanwhile (a race that loses its move now and then). Both
+// grids, 40 x 40 and 50 x 50 (blocks of 5 and 7 rows); the default grid's single diagonals load
+// eight particles and use every other one, and on the 50 x 50 grid such a window reached into
+// the next block.
+TEST(StretchLinks, RegisterWindowsStayInsideTheirTask) {
+  for (int n : {40, 50}) {
+    for (int diagonals : {1, 2}) {
+      SceneConfig scene = swingingScene(diagonals);
+      scene.cloth.rows = scene.cloth.cols = n;
+      Particles particles;
+      ClothTopology topology;
+      buildScene(scene, particles, topology);
+      StretchLinks links;
+      links.assign(topology.stretch, particles.size(), n, n);
+      ASSERT_GT(links.taskCount(), 1);
+      int windows = 0;
+      for (int phase = 0; phase < links.phaseCount(); ++phase) {
+        std::vector<int> owner(particles.size(), -1);
+        auto claim = [&](int first, int count, int task) {
+          for (int q = first; q < first + count; ++q) {
+            ASSERT_TRUE(owner[q] == -1 || owner[q] == task)
+                << "particle " << q << " in windows of tasks " << owner[q] << " and " << task
+                << ", " << n << " x " << n << ", diagonals " << diagonals;
+            owner[q] = task;
+          }
+        };
+        for (int t = links.phase_task[phase]; t < links.phase_task[phase + 1]; ++t) {
+          for (int g = links.batch_segment[links.task_batch[t]];
+               g < links.batch_segment[links.task_batch[t + 1]]; ++g) {
+            const StretchLinks::Segment& segment = links.segments[g];
+            const int c = segment.begin;
+            switch (segment.layout) {
+              case StretchLinks::Layout::kScalar:
+                for (int k = segment.begin; k < segment.end; ++k) {
+                  claim(links.i[k], 1, t);
+                  claim(links.j[k], 1, t);
+                }
+                break;
+              case StretchLinks::Layout::kContiguous:
+                claim(links.i[c], 4, t);
+                claim(links.j[c], 4, t);
+                break;
+              case StretchLinks::Layout::kCrossed:
+                claim(links.i[c], 4, t);
+                claim(links.j[c + 1], 4, t);
+                break;
+              case StretchLinks::Layout::kInterleaved:
+                claim(links.i[c], 8, t);
+                break;
+              case StretchLinks::Layout::kStrided:
+                claim(links.i[c], 8, t);
+                claim(links.j[c], 8, t);
+                break;
+            }
+            windows += segment.layout != StretchLinks::Layout::kScalar;
+          }
+        }
+      }
+      EXPECT_GT(windows, links.size() / 8) << "diagonals " << diagonals;  // registers still used
+    }
+  }
+}
+
 // A 40 x 40 grid (eight blocks of five rows) in tasks: every link in exactly one task, each task
 // inside one block or one seam, and the tasks of a phase sharing no particle.
 TEST(StretchLinks, TasksOfAPhaseShareNoParticle) {
