@@ -85,8 +85,8 @@ TEST(SelfCollision, FoldByTwoGrippersNeverIntersects) {
 
 // solver.threads splits the self-collision broad phase (the two searches side by side at the step
 // start, the vertices' queries in ranges when it runs again within a step): the fold ends in the
-// same positions, bit for bit, with 1, 2 and 3 threads. (A race would show only now and then:
-// scripts/run_sanitizers does not look for them; the partitions are what keeps threads apart.)
+// same positions, bit for bit, with 1, 2 and 3 threads. (A race shows here only now and then;
+// scripts/run_thread_sanitizer runs this test under ThreadSanitizer, which sees it every time.)
 TEST(SelfCollision, EveryThreadCountFindsTheSamePairs) {
   std::vector<Vec3Array> ends;
   for (int threads : {1, 2, 3}) {
