@@ -439,6 +439,7 @@ double Solver::projectBend(double h, Particles& p, const ClothTopology& topology
 // one per pass and no per-vertex weight arithmetic.
 double Solver::projectFlatBend(Particles& p, const ClothTopology& topology, double alpha,
                                double k) {
+  if (topology.bend.empty()) return 0.0;  // (and no multipliers to point at)
   FlatHingeStep step;
   step.inverse_denominator = bend_inverse_denominator_.data();
   step.factor = bend_factor_.data();

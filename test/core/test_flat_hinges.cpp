@@ -86,5 +86,23 @@ TEST(FlatHinges, OneProjectionFlattensAHingeAtTheEndOfTheArray) {
   EXPECT_EQ(result[0], result[1]);
 }
 
+// A rope (one row: no triangles, no hinges) with bending on steps on both paths: no hinge to
+// project and no multiplier to point at (the sanitizer build checks that nothing reads one).
+TEST(FlatHinges, AClothWithoutHingesSteps) {
+  for (bool simd : {true, false}) {
+    SceneConfig scene = test::clothScene(1, 20, 0.05, Method::kXpbd);
+    scene.cloth.bend_compliance = 1e-3;
+    scene.cloth.self_collision = false;
+    scene.cloth.pinned = {0};
+    scene.solver.simd = simd;
+    Simulation sim(scene);
+    ASSERT_TRUE(sim.topology().bend.empty());
+    const Vec3 end_start = sim.particles().position[19];
+    for (int step = 0; step < 30; ++step) sim.step();
+    EXPECT_TRUE(sim.computeMetrics().finite);
+    EXPECT_GT((sim.particles().position[19] - end_start).norm(), 0.1) << "simd " << simd;
+  }
+}
+
 }  // namespace
 }  // namespace pbd_cloth
