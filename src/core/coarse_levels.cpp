@@ -91,8 +91,8 @@ void CoarseLevels::build(int rows, int cols, double spacing, int levels) {
       }
       if (a + 1 == nr) continue;
       for (int b = 0; b < nc; ++b) add(a, b, a + 1, b);
-      // The main diagonals of the row's cells, then the anti-diagonals: each run shares no
-      // particle and steps through both rows one particle at a time (four to a register).
+      // Both diagonals of a cell, main then anti, even cells then odd: four in a row step through
+      // the upper row one by one and the lower one swapped in pairs (the kCrossed registers).
       for (int parity = 0; parity < 2; ++parity) {
         for (int b = parity; b + 1 < nc; b += 2) {
           add(a, b, a + 1, b + 1);
