@@ -107,7 +107,6 @@ class Solver {
   std::vector<double> bend_inverse_denominator_;
   std::vector<double> bend_factor_;
   std::vector<double> bend_largest_factor_;
-  std::vector<int> bend_order_;    // projectFlatBend's sweep: hinges colour by colour
   Vec3Array jacobi_delta_;         // Jacobi: summed corrections per particle
   std::vector<int> jacobi_count_;  // Jacobi: stretch and bend constraints on each free particle
   Vec3Array force_;                // mass_spring: force accumulator

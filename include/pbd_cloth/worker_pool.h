@@ -26,6 +26,11 @@ class WorkerPool {
   // Starts or stops workers so that `threads` (>= 1) run each job, the caller included.
   void resize(int threads);
   int threads() const { return static_cast<int>(workers_.size()) + 1; }
+  // The first of `count` items that t of `threads` takes when they split them into equal
+  // consecutive ranges: t takes [rangeBegin(count, t, threads), rangeBegin(count, t + 1, threads)).
+  static int rangeBegin(int count, int t, int threads) {
+    return static_cast<int>(static_cast<long>(count) * t / threads);
+  }
 
   template <typename Job>
   void run(Job& job) {

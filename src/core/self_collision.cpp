@@ -209,8 +209,6 @@ void SelfCollision::carryVertexTriangleStates() {
   }
 }
 
-// Triangles are hashed (each in the cells its box covers) and every vertex queries its small
-// box: fewer, shorter queries than the other way round. The cell is the mean triangle box.
 void SelfCollision::sizeThreadLists(int threads) {
   if (static_cast<int>(thread_pairs_.size()) < threads) thread_pairs_.resize(threads);
   for (int t = 0; t < threads; ++t) thread_pairs_[t].clear();
@@ -222,6 +220,8 @@ void SelfCollision::joinThreadLists(int threads, std::vector<SelfContactPair>& f
   }
 }
 
+// Triangles are hashed (each in the cells its box covers) and every vertex queries its small
+// box: fewer, shorter queries than the other way round. The cell is the mean triangle box.
 void SelfCollision::findVertexTrianglePairs(const Particles& p, const ClothTopology& topology,
                                             WorkerPool* pool, std::vector<SelfContactPair>& found) {
   const auto& tri = topology.triangles;
@@ -264,8 +264,8 @@ void SelfCollision::findVertexTrianglePairs(const Particles& p, const ClothTopol
   // Threads take consecutive ranges of vertices: joined in order, the list is the one above.
   sizeThreadLists(threads);
   auto job = [&](int t) {
-    const int begin = static_cast<int>(static_cast<long>(p.cloth_count) * t / threads);
-    const int end = static_cast<int>(static_cast<long>(p.cloth_count) * (t + 1) / threads);
+    const int begin = WorkerPool::rangeBegin(p.cloth_count, t, threads);
+    const int end = WorkerPool::rangeBegin(p.cloth_count, t + 1, threads);
     for (int v = begin; v < end; ++v) query(v, thread_pairs_[t]);
   };
   pool->run(job);

@@ -170,11 +170,6 @@ double Solver::pbdStiffness(double k) const {
 // 1 - c h it never turns negative and is the same for any split of a step into substeps.
 double Solver::dampingFactor(double h) const { return std::exp(-config_.damping * h); }
 
-// Predict (seed: Verlet step; PBD: symplectic Euler): damp the carried velocity, v = e^{-c h} v +
-// h g, x += h v. Damping acts on the velocity the particle carries, not on this substep's gravity
-// increment: a body at rest feels the full g h^2 and a damped link settles at the undamped static
-// stretch (a viscous damper exerts no force at rest; REFERENCE_CASES.md case 6). Kinematic
-// particles take their prescribed position at fraction s_end of the step instead.
 namespace {
 
 // Every particle's prediction of a substep as if it were free (seed: v += h g, x += h v; XPBD
@@ -189,22 +184,32 @@ namespace {
 #else
 #define PBD_INLINE inline
 #endif
-PBD_INLINE void predictAsFree(int begin, int end, double keep, double h, double dv_x, double dv_y,
-                              double dv_z, double* __restrict x, double* __restrict v,
-                              double* __restrict start, double* __restrict predicted) {
+struct PredictArgs {
+  int begin, end;  // particles
+  double keep, h, dv_x, dv_y, dv_z;
+  double *x, *v, *start, *predicted;  // flat coordinates
+};
+
+PBD_INLINE void predictAsFree(const PredictArgs& a) {
+  double* __restrict x = a.x;
+  double* __restrict v = a.v;
+  double* __restrict start = a.start;
+  double* __restrict predicted = a.predicted;
+  const double keep = a.keep, h = a.h;
   // Four particles (twelve coordinates, three AVX2 registers) at a time, the rest one by one.
-  const double dv[12] = {dv_x, dv_y, dv_z, dv_x, dv_y, dv_z, dv_x, dv_y, dv_z, dv_x, dv_y, dv_z};
+  const double dv[12] = {a.dv_x, a.dv_y, a.dv_z, a.dv_x, a.dv_y, a.dv_z,
+                         a.dv_x, a.dv_y, a.dv_z, a.dv_x, a.dv_y, a.dv_z};
   auto advance = [&](int k, int q) {
     start[k] = x[k];
     v[k] = keep * v[k] + dv[q];
     x[k] += h * v[k];
     predicted[k] = x[k];
   };
-  int i = begin;
-  for (; i + 4 <= end; i += 4) {
+  int i = a.begin;
+  for (; i + 4 <= a.end; i += 4) {
     for (int q = 0; q < 12; ++q) advance(3 * i + q, q);
   }
-  for (; i < end; ++i) {
+  for (; i < a.end; ++i) {
     for (int d = 0; d < 3; ++d) advance(3 * i + d, d);
   }
 }
@@ -217,17 +222,8 @@ PBD_INLINE void updateAsFree(int begin, int end, double inv_h, const double* __r
   for (int k = begin; k < end; ++k) v[k] += (x[k] - predicted[k]) * inv_h;
 }
 
-struct PredictArgs {
-  int begin, end;
-  double keep, h, dv_x, dv_y, dv_z;
-  double *x, *v, *start, *predicted;
-};
-
 #if defined(__x86_64__) && defined(__GNUC__)
-__attribute__((target("avx2"))) void predictAvx2(const PredictArgs& a) {
-  predictAsFree(a.begin, a.end, a.keep, a.h, a.dv_x, a.dv_y, a.dv_z, a.x, a.v, a.start,
-                a.predicted);
-}
+__attribute__((target("avx2"))) void predictAvx2(const PredictArgs& a) { predictAsFree(a); }
 __attribute__((target("avx2"))) void updateAvx2(int begin, int end, double inv_h, const double* x,
                                                 const double* predicted, double* v) {
   updateAsFree(begin, end, inv_h, x, predicted, v);
@@ -240,8 +236,7 @@ void predictFree(const PredictArgs& a, bool avx2) {
 #else
   (void)avx2;
 #endif
-  predictAsFree(a.begin, a.end, a.keep, a.h, a.dv_x, a.dv_y, a.dv_z, a.x, a.v, a.start,
-                a.predicted);
+  predictAsFree(a);
 }
 
 void updateFree(int begin, int end, double inv_h, const double* x, const double* predicted,
@@ -256,6 +251,11 @@ void updateFree(int begin, int end, double inv_h, const double* x, const double*
 
 }  // namespace
 
+// Predict (seed: Verlet step; PBD: symplectic Euler): damp the carried velocity, v = e^{-c h} v +
+// h g, x += h v. Damping acts on the velocity the particle carries, not on this substep's gravity
+// increment: a body at rest feels the full g h^2 and a damped link settles at the undamped static
+// stretch (a viscous damper exerts no force at rest; REFERENCE_CASES.md case 6). Kinematic
+// particles take their prescribed position at fraction s_end of the step instead.
 void Solver::predict(double h, double s_end, Particles& p) {
   const int n = p.size();
   if (n == 0) return;
@@ -265,8 +265,8 @@ void Solver::predict(double h, double s_end, Particles& p) {
   const bool avx2 = config_.simd && stretchLinksUseAvx2();
   // Threads take equal ranges of particles (each particle on its own).
   auto job = [&](int t) {
-    const int begin = static_cast<int>(static_cast<long>(n) * t / threads);
-    const int end = static_cast<int>(static_cast<long>(n) * (t + 1) / threads);
+    const int begin = WorkerPool::rangeBegin(n, t, threads);
+    const int end = WorkerPool::rangeBegin(n, t + 1, threads);
     const double* w = p.inverse_mass.data();
     for (int i = begin; i < end; ++i) {
       if (w[i] == 0.0) kinematic_velocity_[i] = p.velocity[i];
@@ -667,8 +667,8 @@ void Solver::updateVelocities(double h, Particles& p) {
   const int threads = pool_.threads();
   const bool avx2 = config_.simd && stretchLinksUseAvx2();
   auto job = [&](int t) {
-    const int begin = static_cast<int>(static_cast<long>(n) * t / threads);
-    const int end = static_cast<int>(static_cast<long>(n) * (t + 1) / threads);
+    const int begin = WorkerPool::rangeBegin(n, t, threads);
+    const int end = WorkerPool::rangeBegin(n, t + 1, threads);
     updateFree(3 * begin, 3 * end, inv_h, p.position.front().data(), predicted_.front().data(),
                p.velocity.front().data(), avx2);
     // A kinematic particle's velocity is the one it moved with: (x - x_start) / h.

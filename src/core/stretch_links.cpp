@@ -370,16 +370,15 @@ void StretchLinks::findSegments(int particle_count, int grid_rows, int grid_cols
     for (int k = 0; k < 4; ++k) crossed = crossed && i[c + k] == i0 + k && j[c + k] == m + (k ^ 1);
     interleaved = strided && j0 == i0 + 1;
     const int gap = std::abs(j0 - i0);
-    auto fits = [&](int width) {
-      return i0 >= 0 && j0 >= 0 && i0 + width <= particle_count && j0 + width <= particle_count;
+    // Both windows of `width` particles, from i0 and from j_first, inside the particles.
+    auto fits = [&](int width, int j_first) {
+      return i0 >= 0 && j_first >= 0 && i0 + width <= particle_count &&
+             j_first + width <= particle_count;
     };
-    if (contiguous && gap >= 4 && fits(4)) return Layout::kContiguous;
-    if (crossed && std::abs(m - i0) >= 4 && i0 >= 0 && m >= 0 && i0 + 4 <= particle_count &&
-        m + 4 <= particle_count) {
-      return Layout::kCrossed;
-    }
-    if (interleaved && fits(8)) return Layout::kInterleaved;
-    if (strided && gap >= 8 && fits(8) && oneRow(i0, 8) && oneRow(j0, 8)) {
+    if (contiguous && gap >= 4 && fits(4, j0)) return Layout::kContiguous;
+    if (crossed && std::abs(m - i0) >= 4 && fits(4, m)) return Layout::kCrossed;
+    if (interleaved && fits(8, j0)) return Layout::kInterleaved;
+    if (strided && gap >= 8 && fits(8, j0) && oneRow(i0, 8) && oneRow(j0, 8)) {
       return Layout::kStrided;
     }
     return Layout::kScalar;
