@@ -29,13 +29,16 @@
 //   them.)
 // - Particles and cloth: the broad phase bounds each particle's motion over the step by its swept
 //   box (step-start position to the unconstrained prediction x + v dt + g dt^2, grown by half its
-//   radius). After each substep's prediction the particles are checked against their boxes; if one
-//   left its box the particle-particle and vertex-triangle candidates are searched again for the
-//   rest of the step (edge-edge candidates, a safety net behind vertex-triangle, stay those of
-//   the step start). A contact found again keeps its state (friction window, its base point and
-//   the depth resolved in it; a self-contact's side), so the search changes nothing for it.
-//   Self-contacts keep each vertex (edge) on the side of the triangle (edge) it was on, so a vertex
-//   pushed through a cloth layer is pulled back, never out of the far side.
+//   radius) and, for self-collision, by its reference path (a straight line to its free flight at
+//   the step end, left by at most the same half radius), which lets the search drop pairs that
+//   stay apart however the boxes overlap (SelfCollision::findPairs). After each substep's
+//   prediction the particles are checked against both; if one left its box or path the
+//   particle-particle and vertex-triangle candidates are searched again for the rest of the step
+//   (edge-edge candidates, a safety net behind vertex-triangle, stay those of the step start). A
+//   contact found again keeps its state (friction window, its base point and the depth resolved
+//   in it; a self-contact's side), so the search changes nothing for it. Self-contacts keep each
+//   vertex (edge) on the side of the triangle (edge) it was on, so a vertex pushed through a cloth
+//   layer is pulled back, never out of the far side.
 // - Initial overlaps: at each step start, pre-stabilisation separates contacts overlapping by more
 //   than a slop by at most max_separation_speed * dt, on positions before the prediction, so the
 //   separation adds no velocity (Macklin et al. 2014, sec. 4.4). What remains is only kept from
@@ -137,9 +140,14 @@ class Collisions {
   void setMaxSeparationSpeed(double speed) { max_separation_speed_ = speed; }
 
  private:
-  void computeSweptBoxes(const Particles& particles, double time_left);
+  // Swept boxes over box_time from now, and reference paths over path_time from now, the
+  // particles' positions being those of fraction `fraction` of the step.
+  void computeSweptBoxes(const Particles& particles, double box_time, double path_time,
+                         double fraction);
   void findCandidates(const Particles& particles, const ClothTopology& topology, bool step_start);
-  bool leftSweptBoxes(const Particles& particles) const;
+  // Whether a particle left its swept box or (self-collision) its reference path: the search's
+  // candidates then no longer cover every contact.
+  bool leftMotionBounds(const Particles& particles) const;
   void preStabilizeObstacles(Particles& particles, double max_shift);
   double projectObstacles(Particles& particles);
   double projectBounds(Particles& particles) const;
@@ -184,6 +192,15 @@ class Collisions {
   // Broad phase of the step.
   Vec3Array box_lo_;  // swept box of each particle over the (rest of the) step
   Vec3Array box_hi_;
+  // The second motion bound (self-collision): each particle's reference path, a straight line
+  // from path_start_ (where it was at the search, fraction path_fraction_ of the step) to
+  // path_start_ + path_move_ (its free flight to the step end), which it may leave by at most
+  // path_deviation_ (kBoxSlack times its radius) while the search stands.
+  Vec3Array path_start_;
+  Vec3Array path_move_;
+  std::vector<double> path_deviation_;
+  double path_fraction_ = 0.0;
+  double substep_end_ = 0.0;
   ParticleContacts particle_contacts_;
   SelfCollision self_collision_pairs_;
   WorkerPool* pool_ = nullptr;

@@ -33,6 +33,18 @@
 
 namespace pbd_cloth {
 
+// How far each particle may move during the rest of the step, while the broad phase's candidates
+// stand (Collisions::computeSweptBoxes): within its swept box [lo, hi], and within
+// path_deviation of its reference path, the line from path_start (where it is at the search) to
+// path_start + path_move (at the step end).
+struct MotionBounds {
+  const Vec3Array& lo;
+  const Vec3Array& hi;
+  const Vec3Array& path_start;
+  const Vec3Array& path_move;
+  const std::vector<double>& path_deviation;
+};
+
 struct SelfContactPair {
   // Vertex-triangle: the vertex, then the triangle's corners. Edge-edge: one edge, then the other.
   int index[4] = {0, 0, 0, 0};
@@ -47,8 +59,9 @@ class SelfCollision {
   // Sizes the buffers and lists the mesh's edges.
   void reserve(const Particles& particles, const ClothTopology& topology);
 
-  // Broad phase, once per step: each cloth vertex whose swept box [lo, hi] comes within h of a
-  // triangle's swept box (the triangle's own vertices excepted) and, with `edge_pairs`, each pair
+  // Broad phase, once per step: each cloth vertex whose swept box comes within h of a triangle's
+  // swept box (the triangle's own vertices excepted) and that the reference paths do not keep
+  // farther than h from it (below) and, with `edge_pairs`, each pair
   // of edges of cells that are not neighbours whose swept boxes come within h. The sides come
   // from the step-start positions. A repeated broad phase within the step (a particle left its
   // box) passes edge_pairs = false: it renews the vertex-triangle pairs, the primary contacts, and
@@ -58,8 +71,16 @@ class SelfCollision {
   // side by side on two threads, each with its own hash; a repeated search splits the vertices'
   // queries into ranges, each thread listing its range's pairs, joined in range order. Either
   // way the same pairs in the same order as one thread finds them.
-  void findPairs(const Particles& particles, const ClothTopology& topology, const Vec3Array& lo,
-                 const Vec3Array& hi, double thickness, bool edge_pairs,
+  // The paths' cull: points of the triangle are convex combinations of its corners, so while each
+  // particle i stays within r_i of its path x_i + s u_i (s in [0, 1] the same for all), the
+  // distance between the vertex v and the triangle (a, b, c) changes from its value d at the
+  // search by at most r_v + max_k r_k + max_k |u_v - u_k| (k = a, b, c). A pair with
+  //   d > h + r_v + max_k r_k + max_k |u_v - u_k|
+  // cannot come within h before a particle leaves its path, which Collisions checks at every
+  // substep (and then searches again): it is left out. It drops the neighbours of a flat cloth
+  // moving as a whole, which the boxes alone list.
+  void findPairs(const Particles& particles, const ClothTopology& topology,
+                 const MotionBounds& bounds, double thickness, bool edge_pairs,
                  WorkerPool* pool = nullptr);
 
   // Pre-stabilisation: pushes contacts closer than h by more than the slop (a fraction of h) apart
@@ -90,10 +111,12 @@ class SelfCollision {
   // Each appends its pairs to `found`; a pool of more than one thread splits the search into
   // ranges (threads' lists joined in range order).
   void findVertexTrianglePairs(const Particles& particles, const ClothTopology& topology,
-                               WorkerPool* pool, std::vector<SelfContactPair>& found);
+                               const MotionBounds& bounds, double thickness, WorkerPool* pool,
+                               std::vector<SelfContactPair>& found);
   void carryVertexTriangleStates();
   void findEdgeEdgePairs(const Particles& particles, const ClothTopology& topology,
-                         WorkerPool* pool, std::vector<SelfContactPair>& found);
+                         const MotionBounds& bounds, double thickness, WorkerPool* pool,
+                         std::vector<SelfContactPair>& found);
   // Threads' lists, appended to `found` in thread order (their capacity is kept between steps).
   void sizeThreadLists(int threads);
   void joinThreadLists(int threads, std::vector<SelfContactPair>& found);

@@ -128,7 +128,10 @@ void Collisions::prepare(const Particles& particles, const ClothTopology& topolo
   checked_substep_ = -1;
   dt_ = 0.0;
   stats_ = CollisionStats();
-  computeSweptBoxes(particles, 0.0);
+  path_start_.assign(n, Vec3::Zero());
+  path_move_.assign(n, Vec3::Zero());
+  path_deviation_.assign(n, 0.0);
+  computeSweptBoxes(particles, 0.0, 0.0, 0.0);
   findCandidates(particles, topology, true);
 }
 
@@ -140,22 +143,36 @@ bool Collisions::selfCollisionActive(const ClothTopology& topology) const {
   return self_collision_ && topology.triangleCount() > 0;
 }
 
-// The motion bound of the broad phase: from where the particle is to its unconstrained prediction
-// time_left later (x + v T + g T^2, above the substepped free flight x + v T + g T^2 (1 + 1/n) /
-// 2), grown by half the radius for the constraints' deviation from it. Kinematic particles move
-// exactly to their prescribed target. After predict() the substep start is included as well.
-void Collisions::computeSweptBoxes(const Particles& p, double time_left) {
+// The motion bounds of the broad phase.
+// The swept box: from where the particle is to its unconstrained prediction box_time later
+// (x + v T + g T^2, above the substepped free flight x + v T + g T^2 (1 + 1/n) / 2), grown by half
+// the radius for the constraints' deviation from it. Kinematic particles move exactly to their
+// prescribed target. After predict() the substep start is included as well.
+// The reference path (self-collision's distance cull, SelfCollision::findPairs): the straight
+// line from x to its free flight x + v T + g T^2 / 2 path_time later (a kinematic particle's own
+// straight line to its target), left by at most the same half radius. A box bounds where a
+// particle may go, the path how it may move relative to its neighbours: a cloth falling or
+// swinging as a whole moves its neighbours along the same paths, so a vertex and the triangles
+// around it, which every box search lists (a right triangle's box holds the opposite corner of
+// the next one), are culled by their distance now.
+void Collisions::computeSweptBoxes(const Particles& p, double box_time, double path_time,
+                                   double fraction) {
   const bool mid_step = checked_substep_ >= 0;
+  path_fraction_ = fraction;
   for (int i = 0; i < p.size(); ++i) {
     const Vec3& x = p.position[i];
     Vec3 end;
     double slack = 0.0;
     if (p.inverse_mass[i] == 0.0) {
       end = p.kinematic_to[i];
+      path_move_[i] = p.kinematic_to[i] - x;
     } else {
-      end = x + time_left * p.velocity[i] + (time_left * time_left) * gravity_;
+      end = x + box_time * p.velocity[i] + (box_time * box_time) * gravity_;
       slack = kBoxSlack * p.radius[i];
+      path_move_[i] = path_time * p.velocity[i] + (0.5 * path_time * path_time) * gravity_;
     }
+    path_start_[i] = x;
+    path_deviation_[i] = kBoxSlack * p.radius[i];
     Vec3 lo = x.cwiseMin(end), hi = x.cwiseMax(end);
     if (mid_step) {
       lo = lo.cwiseMin(p.substep_start[i]);
@@ -172,8 +189,8 @@ void Collisions::findCandidates(const Particles& particles, const ClothTopology&
     particle_contacts_.findPairs(particles, box_lo_, box_hi_, !step_start);
   }
   if (selfCollisionActive(topology)) {
-    self_collision_pairs_.findPairs(particles, topology, box_lo_, box_hi_, thickness_, step_start,
-                                    pool_);
+    const MotionBounds bounds{box_lo_, box_hi_, path_start_, path_move_, path_deviation_};
+    self_collision_pairs_.findPairs(particles, topology, bounds, thickness_, step_start, pool_);
   }
   stats_.particle_pairs = particle_contacts_.pairCount();
   const bool self_collision = selfCollisionActive(topology);
@@ -183,12 +200,20 @@ void Collisions::findCandidates(const Particles& particles, const ClothTopology&
   ++stats_.broad_phase_runs;
 }
 
-bool Collisions::leftSweptBoxes(const Particles& p) const {
+bool Collisions::leftMotionBounds(const Particles& p) const {
   for (int i = 0; i < p.size(); ++i) {
     const Vec3& x = p.position[i];
     if (!((x.array() >= box_lo_[i].array()).all() && (x.array() <= box_hi_[i].array()).all())) {
       return true;
     }
+  }
+  if (!self_collision_) return false;
+  // The predicted positions are those of the substep's end: that far along the reference paths.
+  const double span = 1.0 - path_fraction_;
+  const double along = span > 0.0 ? std::min(1.0, (substep_end_ - path_fraction_) / span) : 1.0;
+  for (int i = 0; i < p.cloth_count; ++i) {
+    const Vec3 off_path = p.position[i] - (path_start_[i] + along * path_move_[i]);
+    if (off_path.squaredNorm() > path_deviation_[i] * path_deviation_[i]) return true;
   }
   return false;
 }
@@ -205,7 +230,7 @@ void Collisions::beginStep(Particles& particles, const ClothTopology& topology, 
   const bool particle_contacts = particleContactsActive(particles);
   const bool self_collision = selfCollisionActive(topology);
   if (particle_contacts || self_collision) {
-    computeSweptBoxes(particles, dt);
+    computeSweptBoxes(particles, dt, dt, 0.0);
     findCandidates(particles, topology, true);
   }
   // Overlaps the step starts with are separated here, before predict() copies the positions into
@@ -233,6 +258,7 @@ void Collisions::setSubstepFraction(double s_begin, double s_end) {
   }
   ++substep_;
   substep_begin_ = s_begin;
+  substep_end_ = s_end;
   for (std::size_t k = 0; k < obstacles_.size(); ++k) {
     frame_begin_[k] = interpolateFrame(obstacles_[k].pose, obstacle_targets_[k], s_begin);
     frame_end_[k] = interpolateFrame(obstacles_[k].pose, obstacle_targets_[k], s_end);
@@ -251,8 +277,9 @@ double Collisions::project(Particles& particles, const ClothTopology& topology) 
     // First pass of a substep: the prediction is done. A particle outside its swept box may meet
     // contacts the broad phase did not list: find them again for the rest of the step.
     checked_substep_ = substep_;
-    if ((particle_contacts || self_collision) && leftSweptBoxes(particles)) {
-      computeSweptBoxes(particles, (1.0 - substep_begin_) * dt_);
+    if ((particle_contacts || self_collision) && leftMotionBounds(particles)) {
+      computeSweptBoxes(particles, (1.0 - substep_begin_) * dt_, (1.0 - substep_end_) * dt_,
+                        substep_end_);
       findCandidates(particles, topology, false);
       if (particle_contacts) {
         particle_contacts_.measureAllowances(particles, particles.step_start, kOverlapSlop);
@@ -450,7 +477,7 @@ void Collisions::setMeshContacts(const std::vector<MeshContactCache>& caches) {
 
 void Collisions::findCandidatesNow(const Particles& particles, const ClothTopology& topology) {
   checked_substep_ = -1;
-  computeSweptBoxes(particles, 0.0);
+  computeSweptBoxes(particles, 0.0, 0.0, 0.0);
   findCandidates(particles, topology, true);
 }
 

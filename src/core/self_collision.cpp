@@ -82,6 +82,60 @@ bool edgeEdge(const Vec3& p1, const Vec3& p2, const Vec3& q1, const Vec3& q2, Co
   return true;
 }
 
+// Distance from q to the closest point of the triangle (p1, p2, p3) (Ericson 2005, sec. 5.1.5:
+// the Voronoi region of q among the corners, edges and face).
+double pointTriangleDistance(const Vec3& q, const Vec3& p1, const Vec3& p2, const Vec3& p3) {
+  const Vec3 ab = p2 - p1, ac = p3 - p1, ap = q - p1;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0.0 && d2 <= 0.0) return ap.norm();
+  const Vec3 bp = q - p2;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0.0 && d4 <= d3) return bp.norm();
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return (ap - (d1 / (d1 - d3)) * ab).norm();
+  const Vec3 cp = q - p3;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0.0 && d5 <= d6) return cp.norm();
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return (ap - (d2 / (d2 - d6)) * ac).norm();
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0) {
+    return (bp - ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (p3 - p2)).norm();
+  }
+  const double denominator = va + vb + vc;
+  if (!(denominator > 0.0)) return 0.0;  // degenerate: no cull
+  return (ap - (vb / denominator) * ab - (vc / denominator) * ac).norm();
+}
+
+// Distance between the segments p1p2 and q1q2 (Ericson 2005, sec. 5.1.9: the closest points of
+// the lines, clamped to the segments in turn).
+double segmentSegmentDistance(const Vec3& p1, const Vec3& p2, const Vec3& q1, const Vec3& q2) {
+  const Vec3 d1 = p2 - p1, d2 = q2 - q1, r = p1 - q1;
+  const double a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r);
+  double s = 0.0, t = 0.0;
+  if (a <= kDegenerate && e <= kDegenerate) return r.norm();
+  if (a <= kDegenerate) {
+    t = std::clamp(f / e, 0.0, 1.0);
+  } else {
+    const double c = d1.dot(r);
+    if (e <= kDegenerate) {
+      s = std::clamp(-c / a, 0.0, 1.0);
+    } else {
+      const double b = d1.dot(d2), denominator = a * e - b * b;
+      s = denominator > 0.0 ? std::clamp((b * f - c * e) / denominator, 0.0, 1.0) : 0.0;
+      t = (b * s + f) / e;
+      if (t < 0.0) {
+        t = 0.0;
+        s = std::clamp(-c / a, 0.0, 1.0);
+      } else if (t > 1.0) {
+        t = 1.0;
+        s = std::clamp((b - c) / a, 0.0, 1.0);
+      }
+    }
+  }
+  return (p1 + s * d1 - (q1 + t * d2)).norm();
+}
+
 bool geometry(const SelfContactPair& pair, const Vec3Array& x, ContactGeometry& g) {
   const int* k = pair.index;
   return pair.edge_edge ? edgeEdge(x[k[0]], x[k[1]], x[k[2]], x[k[3]], g)
@@ -152,8 +206,10 @@ std::size_t SelfCollision::releaseExcessCapacity() {
 }
 
 void SelfCollision::findPairs(const Particles& p, const ClothTopology& topology,
-                              const Vec3Array& lo, const Vec3Array& hi, double thickness,
-                              bool edge_pairs, WorkerPool* pool) {
+                              const MotionBounds& bounds, double thickness, bool edge_pairs,
+                              WorkerPool* pool) {
+  const Vec3Array& lo = bounds.lo;
+  const Vec3Array& hi = bounds.hi;
   // Edge-edge pairs first, vertex-triangle pairs after them: a repeated broad phase within the
   // step replaces only the latter, and keeps the old ones aside to hand their states on.
   if (!edge_pairs) previous_.assign(pairs_.begin() + edge_pair_count_, pairs_.end());
@@ -175,8 +231,8 @@ void SelfCollision::findPairs(const Particles& p, const ClothTopology& topology,
     // straight into the list, vertex-triangle pairs into their own, appended after them.
     vertex_found_.clear();
     auto job = [&](int t) {
-      if (t == 0) findVertexTrianglePairs(p, topology, nullptr, vertex_found_);
-      if (t == 1) findEdgeEdgePairs(p, topology, nullptr, pairs_);
+      if (t == 0) findVertexTrianglePairs(p, topology, bounds, thickness, nullptr, vertex_found_);
+      if (t == 1) findEdgeEdgePairs(p, topology, bounds, thickness, nullptr, pairs_);
     };
     pool->run(job);
     edge_pair_count_ = static_cast<int>(pairs_.size());
@@ -184,10 +240,10 @@ void SelfCollision::findPairs(const Particles& p, const ClothTopology& topology,
     return;
   }
   if (edge_pairs) {
-    findEdgeEdgePairs(p, topology, pool, pairs_);
+    findEdgeEdgePairs(p, topology, bounds, thickness, pool, pairs_);
     edge_pair_count_ = static_cast<int>(pairs_.size());
   }
-  findVertexTrianglePairs(p, topology, pool, pairs_);
+  findVertexTrianglePairs(p, topology, bounds, thickness, pool, pairs_);
   if (!edge_pairs) carryVertexTriangleStates();
 }
 
@@ -223,7 +279,11 @@ void SelfCollision::joinThreadLists(int threads, std::vector<SelfContactPair>& f
 // Triangles are hashed (each in the cells its box covers) and every vertex queries its small
 // box: fewer, shorter queries than the other way round. The cell is the mean triangle box.
 void SelfCollision::findVertexTrianglePairs(const Particles& p, const ClothTopology& topology,
+                                            const MotionBounds& bounds, double thickness,
                                             WorkerPool* pool, std::vector<SelfContactPair>& found) {
+  const Vec3Array& x = bounds.path_start;
+  const Vec3Array& move = bounds.path_move;
+  const std::vector<double>& deviation = bounds.path_deviation;
   const auto& tri = topology.triangles;
   const int triangles = topology.triangleCount();
   triangle_lo_.resize(triangles);
@@ -242,6 +302,12 @@ void SelfCollision::findVertexTrianglePairs(const Particles& p, const ClothTopol
       const int a = static_cast<int>(tri[3 * t]), b = static_cast<int>(tri[3 * t + 1]),
                 c = static_cast<int>(tri[3 * t + 2]);
       if (v == a || v == b || v == c || allKinematic(p, v, a, b, c)) return;
+      // The paths' cull (findPairs).
+      const double reach =
+          thickness + deviation[v] + std::max({deviation[a], deviation[b], deviation[c]}) +
+          std::sqrt(std::max({(move[v] - move[a]).squaredNorm(), (move[v] - move[b]).squaredNorm(),
+                              (move[v] - move[c]).squaredNorm()}));
+      if (pointTriangleDistance(x[v], x[a], x[b], x[c]) > reach) return;
       ContactGeometry start;
       if (!vertexTriangle(p.step_start[v], p.step_start[a], p.step_start[b], p.step_start[c],
                           start)) {
@@ -273,7 +339,11 @@ void SelfCollision::findVertexTrianglePairs(const Particles& p, const ClothTopol
 }
 
 void SelfCollision::findEdgeEdgePairs(const Particles& p, const ClothTopology& topology,
+                                      const MotionBounds& bounds, double thickness,
                                       WorkerPool* pool, std::vector<SelfContactPair>& found) {
+  const Vec3Array& x = bounds.path_start;
+  const Vec3Array& move = bounds.path_move;
+  const std::vector<double>& deviation = bounds.path_deviation;
   // Edges of one grid cell or of neighbouring cells (some end points within one row and column)
   // are left out: nearly coplanar while the cloth is smooth, they would get a side by chance, and
   // folding them onto each other is already stopped by the vertex-triangle contacts.
@@ -302,6 +372,13 @@ void SelfCollision::findEdgeEdgePairs(const Particles& p, const ClothTopology& t
     if (near(a, c) || near(a, d) || near(b, c) || near(b, d) || allKinematic(p, a, b, c, d)) {
       return;
     }
+    // The paths' cull (findPairs), for points of the two edges: convex combinations of a, b and
+    // of c, d.
+    const double reach =
+        thickness + std::max(deviation[a], deviation[b]) + std::max(deviation[c], deviation[d]) +
+        std::sqrt(std::max({(move[a] - move[c]).squaredNorm(), (move[a] - move[d]).squaredNorm(),
+                            (move[b] - move[c]).squaredNorm(), (move[b] - move[d]).squaredNorm()}));
+    if (segmentSegmentDistance(x[a], x[b], x[c], x[d]) > reach) return;
     SelfContactPair pair;
     pair.index[0] = a;
     pair.index[1] = b;
