@@ -100,9 +100,10 @@ class SelfCollision {
   // triangle; edges' closest points interior, edges within a few thicknesses) (m).
   double maxPenetration(const Particles& particles, double thickness) const;
   int pairCount() const { return static_cast<int>(pairs_.size()); }
-  // Between steps: the candidate lists go back to their reserve once an extreme step that
-  // outgrew it is over (a fast fold can need many times the usual candidates, and a node that
-  // kept that peak for good would grow with every new extreme). Returns the bytes released.
+  // Between steps: the candidate lists (and the threads' lists of a split search) go back to
+  // their reserve once an extreme step that outgrew it is over (a fast fold can need many times the
+  // usual candidates, and a node that kept that peak for good would grow with every new extreme).
+  // Returns the bytes released.
   std::size_t releaseExcessCapacity();
   int vertexTrianglePairCount() const { return pairCount() - edge_pair_count_; }
   int edgeEdgePairCount() const { return edge_pair_count_; }
@@ -117,7 +118,8 @@ class SelfCollision {
   void findEdgeEdgePairs(const Particles& particles, const ClothTopology& topology,
                          const MotionBounds& bounds, double thickness, WorkerPool* pool,
                          std::vector<SelfContactPair>& found);
-  // Threads' lists, appended to `found` in thread order (their capacity is kept between steps).
+  // Threads' lists, appended to `found` in thread order and emptied (their capacity is kept
+  // between steps, up to the reserve: releaseExcessCapacity).
   void sizeThreadLists(int threads);
   void joinThreadLists(int threads, std::vector<SelfContactPair>& found);
 

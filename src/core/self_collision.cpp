@@ -202,7 +202,13 @@ void SelfCollision::reserve(const Particles& particles, const ClothTopology& top
 }
 
 std::size_t SelfCollision::releaseExcessCapacity() {
-  return shrinkToReserve(pairs_, reserved_pairs_) + shrinkToReserve(previous_, reserved_pairs_);
+  // The threads' lists are scratch, empty between searches: each keeps at most the same reserve.
+  std::size_t released = shrinkToReserve(vertex_found_, reserved_pairs_);
+  for (std::vector<SelfContactPair>& list : thread_pairs_) {
+    released += shrinkToReserve(list, reserved_pairs_);
+  }
+  return released + shrinkToReserve(pairs_, reserved_pairs_) +
+         shrinkToReserve(previous_, reserved_pairs_);
 }
 
 void SelfCollision::findPairs(const Particles& p, const ClothTopology& topology,
@@ -237,6 +243,7 @@ void SelfCollision::findPairs(const Particles& p, const ClothTopology& topology,
     pool->run(job);
     edge_pair_count_ = static_cast<int>(pairs_.size());
     pairs_.insert(pairs_.end(), vertex_found_.begin(), vertex_found_.end());
+    vertex_found_.clear();
     return;
   }
   if (edge_pairs) {
@@ -273,6 +280,7 @@ void SelfCollision::sizeThreadLists(int threads) {
 void SelfCollision::joinThreadLists(int threads, std::vector<SelfContactPair>& found) {
   for (int t = 0; t < threads; ++t) {
     found.insert(found.end(), thread_pairs_[t].begin(), thread_pairs_[t].end());
+    thread_pairs_[t].clear();
   }
 }
 
