@@ -149,8 +149,10 @@ class Collisions {
   // candidates then no longer cover every contact.
   bool leftMotionBounds(const Particles& particles) const;
   void preStabilizeObstacles(Particles& particles, double max_shift);
-  double projectObstacles(Particles& particles);
-  double projectBounds(Particles& particles) const;
+  double projectObstaclesAndBounds(Particles& particles);
+  // The same for particles [begin, end).
+  double projectObstaclesOf(Particles& particles, int begin, int end);
+  double projectBoundsOf(Particles& particles, int begin, int end) const;
   bool particleContactsActive(const Particles& particles) const;
   bool selfCollisionActive(const ClothTopology& topology) const;
 
@@ -204,6 +206,8 @@ class Collisions {
   ParticleContacts particle_contacts_;
   SelfCollision self_collision_pairs_;
   WorkerPool* pool_ = nullptr;
+  // Largest change of each thread's range (solver.threads is at most 64: scene_config.cpp).
+  double thread_max_change_[64] = {};
   CollisionStats stats_;
   Vec3Array kinematic_reaction_;
 };

@@ -14,6 +14,8 @@ namespace {
 // away during the step (allowanceFor in contact.h). The residual overlap of a loaded stack, which
 // the projection and its friction handle, stays below it.
 constexpr double kOverlapSlop = 0.02;
+// Obstacle contacts go to threads only with at least this many particles for each.
+constexpr int kParticlesPerThread = 512;
 // Swept boxes grow by this fraction of the particle radius to absorb the difference between the
 // unconstrained prediction and the constrained motion.
 constexpr double kBoxSlack = 0.5;
@@ -299,8 +301,7 @@ double Collisions::project(Particles& particles, const ClothTopology& topology) 
         std::max(max_change, self_collision_pairs_.project(particles, thickness_, substep_,
                                                            friction_, kinematic_reaction_));
   }
-  max_change = std::max(max_change, projectObstacles(particles));
-  max_change = std::max(max_change, projectBounds(particles));
+  max_change = std::max(max_change, projectObstaclesAndBounds(particles));
   return max_change;
 }
 
@@ -338,11 +339,31 @@ void Collisions::preStabilizeObstacles(Particles& p, double max_shift) {
 // signed distance): C = distance(x) - r >= 0, the full correction to the particle since the shape
 // is immovable, along the surface normal. Swept in the shape's frame for no tunnelling (see
 // collisions.h), followed by friction relative to the shape's own motion over the substep.
-double Collisions::projectObstacles(Particles& p) {
+// Obstacles, then the bounds. Each touches only the particle it projects (and the obstacles its
+// own contact slots), so with threads (solver.threads) each takes a consecutive range of
+// particles: the same result for every count.
+double Collisions::projectObstaclesAndBounds(Particles& p) {
+  if (shapes_.empty() && !bounds_.enabled) return 0.0;
+  const int threads =
+      pool_ != nullptr && p.size() >= 2 * kParticlesPerThread ? pool_->threads() : 1;
+  auto range = [&](int begin, int end) {
+    return std::max(projectObstaclesOf(p, begin, end), projectBoundsOf(p, begin, end));
+  };
+  if (threads == 1) return range(0, p.size());
+  double* max_change = thread_max_change_;
+  auto job = [&](int t) {
+    max_change[t] = range(WorkerPool::rangeBegin(p.size(), t, threads),
+                          WorkerPool::rangeBegin(p.size(), t + 1, threads));
+  };
+  pool_->run(job);
+  return *std::max_element(max_change, max_change + threads);
+}
+
+double Collisions::projectObstaclesOf(Particles& p, int begin, int end) {
   const std::size_t count = shapes_.size();
   if (count == 0) return 0.0;
   double max_change = 0.0;
-  for (int i = 0; i < p.size(); ++i) {
+  for (int i = begin; i < end; ++i) {
     if (p.inverse_mass[i] == 0.0) continue;
     Vec3& x = p.position[i];
     const double r = p.radius[i];
@@ -418,10 +439,10 @@ double Collisions::projectObstacles(Particles& p) {
 
 // The seed's box (C1): x_i = min(max(x_i, min), max), component-wise. Kinematic particles are
 // prescribed and left alone.
-double Collisions::projectBounds(Particles& particles) const {
+double Collisions::projectBoundsOf(Particles& particles, int begin, int end) const {
   if (!bounds_.enabled) return 0.0;
   double max_change = 0.0;
-  for (int i = 0; i < particles.size(); ++i) {
+  for (int i = begin; i < end; ++i) {
     if (particles.inverse_mass[i] == 0.0) continue;
     Vec3& x = particles.position[i];
     const Vec3 clamped = x.cwiseMax(bounds_.min).cwiseMin(bounds_.max);
