@@ -76,6 +76,12 @@ struct ClothTopology {
   std::vector<DistanceConstraint> stretch;  // structural first, then shear
   int structural_count = 0;
   std::vector<BendConstraint> bend;
+  // Grid cloths with at least 32 rows: `bend` grouped into tasks for threads (solver.threads),
+  // task t being bend[bend_task[t] .. bend_task[t + 1]). Tasks [0, bend_blocks) hold the hinges
+  // within one block of rows, the rest those across the seam between two blocks: the tasks of
+  // each group share no particle. Empty: one sequence.
+  std::vector<int> bend_task;
+  int bend_blocks = 0;
   // Mesh cloths only: one entry per hinge of `bend` (empty for the grid, whose rest is flat).
   std::vector<BendRest> bend_rest;
   // Mesh cloths only (the grid uses rows and cols): for each particle, the sorted particles that

@@ -94,6 +94,8 @@ void addStretch(const ClothConfig& cloth, const Vec3Array& x, ClothTopology& top
   }
 }
 
+void groupHingesIntoTasks(ClothTopology& topology);
+
 void addBending(const Vec3Array& x, ClothTopology& topology) {
   // Each interior edge is shared by two triangles: a hinge with the two opposite vertices.
   std::map<std::pair<unsigned, unsigned>, std::pair<int, int>> opposite;  // edge -> (v2, v3)
@@ -133,6 +135,44 @@ void addBending(const Vec3Array& x, ClothTopology& topology) {
   std::stable_sort(
       topology.bend.begin(), topology.bend.end(),
       [&key](const BendConstraint& a, const BendConstraint& b) { return key(a) < key(b); });
+  groupHingesIntoTasks(topology);
+}
+
+// Tasks for threads, as the stretch links' (stretch_links.cpp): eight blocks of rows of equal
+// size where the grid has at least 32 rows (so at least four rows a block), the hinges wholly
+// inside a block first, block by block, then those across each seam. A hinge spans at most three
+// rows, so hinges of different blocks share no particle, nor do those of different seams (four rows
+// apart). The order within a task is the sweep order above; one thread runs the tasks in this order
+// too, so every thread count gives the same result.
+void groupHingesIntoTasks(ClothTopology& topology) {
+  topology.bend_task.clear();
+  topology.bend_blocks = 0;
+  const int rows = topology.rows, cols = topology.cols;
+  if (rows < 32 || cols <= 0 || topology.bend.empty()) return;
+  // Block b: rows [b rows / 8, (b + 1) rows / 8), so row r is in block (8 (r + 1) - 1) / rows.
+  const int blocks = 8;
+  const int count = static_cast<int>(topology.bend.size());
+  std::vector<int> task_of(count);
+  for (int c = 0; c < count; ++c) {
+    int lowest = blocks, highest = -1;
+    for (int k = 0; k < 4; ++k) {
+      const int block = (blocks * (topology.bend[c].index[k] / cols + 1) - 1) / rows;
+      lowest = std::min(lowest, block);
+      highest = std::max(highest, block);
+    }
+    if (highest - lowest > 1 || lowest < 0 || highest >= blocks) return;  // off the grid: one task
+    task_of[c] = lowest == highest ? lowest : blocks + lowest;
+  }
+  const int tasks = 2 * blocks - 1;
+  std::vector<int> start(tasks + 1, 0);
+  for (int c = 0; c < count; ++c) ++start[task_of[c] + 1];
+  for (int t = 0; t < tasks; ++t) start[t + 1] += start[t];
+  std::vector<BendConstraint> grouped(count);
+  std::vector<int> next(start.begin(), start.end() - 1);
+  for (int c = 0; c < count; ++c) grouped[next[task_of[c]]++] = topology.bend[c];
+  topology.bend.swap(grouped);
+  topology.bend_task = start;
+  topology.bend_blocks = blocks;
 }
 
 // --- Mesh cloths (cloth.mesh)
@@ -423,6 +463,8 @@ void buildScene(const SceneConfig& scene, Particles& particles, ClothTopology& t
 void buildBending(const Vec3Array& rest, ClothTopology& topology) {
   topology.bend.clear();
   topology.bend_rest.clear();
+  topology.bend_task.clear();
+  topology.bend_blocks = 0;
   if (topology.from_mesh) {
     addMeshBending(rest, topology);
   } else {

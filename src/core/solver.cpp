@@ -440,13 +440,37 @@ double Solver::projectBend(double h, Particles& p, const ClothTopology& topology
 double Solver::projectFlatBend(Particles& p, const ClothTopology& topology, double alpha,
                                double k) {
   if (topology.bend.empty()) return 0.0;  // (and no multipliers to point at)
-  FlatHingeStep step;
-  step.inverse_denominator = bend_inverse_denominator_.data();
-  step.factor = bend_factor_.data();
-  step.largest_factor = bend_largest_factor_.data();
-  return projectFlatHinges(topology.bend.data(), static_cast<int>(topology.bend.size()), step, k,
-                           alpha, config_.simd, p.position.front().data(),
-                           bend_lambda_.front().data());
+  double* x = p.position.front().data();
+  // Hinges [begin, end) in order.
+  auto sweep = [&](int begin, int end) {
+    FlatHingeStep step;
+    step.inverse_denominator = bend_inverse_denominator_.data() + begin;
+    step.factor = bend_factor_.data() + 4 * static_cast<std::size_t>(begin);
+    step.largest_factor = bend_largest_factor_.data() + begin;
+    return projectFlatHinges(topology.bend.data() + begin, end - begin, step, k, alpha,
+                             config_.simd, x,
+                             bend_lambda_.front().data() + 3 * static_cast<std::size_t>(begin));
+  };
+  const int threads = pool_.threads();
+  const std::vector<int>& task = topology.bend_task;
+  if (threads == 1 || task.empty()) return sweep(0, static_cast<int>(topology.bend.size()));
+  // The blocks' tasks, then the seams' (cloth_builder.cpp, groupHingesIntoTasks): each thread
+  // a consecutive range of a group's tasks, in the order one thread runs them all.
+  double max_change = 0.0;
+  const int groups[3] = {0, topology.bend_blocks, static_cast<int>(task.size()) - 1};
+  for (int g = 0; g < 2; ++g) {
+    const int tasks = groups[g + 1] - groups[g];
+    auto job = [&](int t) {
+      const int first = groups[g] + WorkerPool::rangeBegin(tasks, t, threads);
+      const int last = groups[g] + WorkerPool::rangeBegin(tasks, t + 1, threads);
+      thread_results_[t].max_change = sweep(task[first], task[last]);
+    };
+    pool_.run(job);
+    for (int t = 0; t < threads; ++t) {
+      max_change = std::max(max_change, thread_results_[t].max_change);
+    }
+  }
+  return max_change;
 }
 
 void Solver::prepareBendStep(const Particles& p, const ClothTopology& topology, double h) {

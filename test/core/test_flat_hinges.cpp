@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <utility>
 #include <vector>
 
 #include "pbd_cloth/flat_hinges.h"
@@ -36,6 +37,46 @@ TEST(FlatHinges, Avx2AndPortablePathsAgreeToTheBit) {
         << "bend compliance " << bend_compliance;
     EXPECT_GT((with_simd.particles().position[399] - corner_start).norm(), 0.2);
   }
+}
+
+// Threads (solver.threads) take the hinges task by task (cloth_builder.cpp, groupHingesIntoTasks):
+// on 50 x 50 and 33 x 40 grids every hinge is in exactly one task, the tasks of each group (the
+// row blocks, then the seams) share no particle, and each group has a task for each of two
+// threads; a 31-row grid keeps one sequence. The same positions for every thread count are
+// StretchLinks.EveryThreadCountGivesTheSameCloth's.
+TEST(FlatHinges, HingeTasksOfAGroupShareNoParticle) {
+  for (const auto& [rows, cols] : {std::make_pair(50, 50), std::make_pair(33, 40)}) {
+    SceneConfig scene = test::clothScene(rows, cols, 0.02, Method::kXpbd);
+    scene.cloth.bend_compliance = 1.0;
+    scene.cloth.self_collision = false;
+    Simulation sim(scene);
+    const ClothTopology& topology = sim.topology();
+    const std::vector<int>& task = topology.bend_task;
+    ASSERT_FALSE(task.empty()) << rows << " x " << cols;
+    const int tasks = static_cast<int>(task.size()) - 1;
+    const int blocks = topology.bend_blocks;
+    EXPECT_EQ(tasks, 2 * blocks - 1);
+    EXPECT_GE(blocks, 2);
+    EXPECT_EQ(task.front(), 0);
+    EXPECT_EQ(task.back(), static_cast<int>(topology.bend.size()));
+    for (const auto& [first, end] : {std::make_pair(0, blocks), std::make_pair(blocks, tasks)}) {
+      std::vector<int> owner(rows * cols, -1);  // the task of the group that touched a particle
+      for (int t = first; t < end; ++t) {
+        EXPECT_LT(task[t], task[t + 1]) << "task " << t << " is empty";
+        for (int c = task[t]; c < task[t + 1]; ++c) {
+          for (int k = 0; k < 4; ++k) {
+            const int i = topology.bend[c].index[k];
+            EXPECT_TRUE(owner[i] == -1 || owner[i] == t)
+                << "particle " << i << " in tasks " << owner[i] << " and " << t;
+            owner[i] = t;
+          }
+        }
+      }
+    }
+  }
+  SceneConfig small = test::clothScene(31, 31, 0.02, Method::kXpbd);
+  small.cloth.bend_compliance = 1.0;
+  EXPECT_TRUE(Simulation(small).topology().bend_task.empty());
 }
 
 // One hinge whose corners are the last particles of the array (the AVX2 path reads and writes x y
