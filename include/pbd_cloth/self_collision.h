@@ -124,6 +124,7 @@ class SelfCollision {
   void joinThreadLists(int threads, std::vector<SelfContactPair>& found);
 
   std::vector<std::array<int, 2>> edges_;
+  std::vector<std::array<int, 4>> edge_grid_;  // grid cloths: row, column of each edge's ends
   SpatialHash triangle_hash_;
   SpatialHash edge_hash_;
   Vec3Array grown_lo_;  // vertex boxes grown by h / 2

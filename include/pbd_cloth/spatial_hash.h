@@ -49,7 +49,15 @@ class SpatialHash {
   // in order (threads each take a range, solver.threads).
   template <class Visit>
   void forEachOverlappingPairIn(std::size_t first_bucket, std::size_t end_bucket, bool overflow,
-                                Visit&& visit) const;
+                                Visit&& visit) const {
+    forEachOverlappingPairIn(
+        first_bucket, end_bucket, overflow, [](int, int) { return false; }, visit);
+  }
+  // The same, leaving out the pairs for which skip(a, b) is true before their boxes are compared
+  // (a test on the items alone, cheaper than reading two boxes: the self-collision's neighbours).
+  template <class Skip, class Visit>
+  void forEachOverlappingPairIn(std::size_t first_bucket, std::size_t end_bucket, bool overflow,
+                                Skip&& skip, Visit&& visit) const;
   std::size_t bucketCount() const { return bucket_start_.empty() ? 0 : bucket_start_.size() - 1; }
 
   static constexpr int kMaxCellsPerItem = 64;
@@ -126,14 +134,15 @@ void SpatialHash::forEachOverlapping(const Vec3& lo, const Vec3& hi, Visit&& vis
   }
 }
 
-template <class Visit>
+template <class Skip, class Visit>
 void SpatialHash::forEachOverlappingPairIn(std::size_t first_bucket, std::size_t end_bucket,
-                                           bool overflow, Visit&& visit) const {
+                                           bool overflow, Skip&& skip, Visit&& visit) const {
   // Boxes too long to be filed meet every other box through a query of their own.
   if (overflow) {
     for (int a : overflow_) {
       forEachOverlapping(lo_[a], hi_[a], [&](int b) {
-        if (b != a && !(cellsSpanned(lo_cell_[b], cellOf(hi_[b])) > kMaxCellsPerItem && b < a)) {
+        if (b != a && !(cellsSpanned(lo_cell_[b], cellOf(hi_[b])) > kMaxCellsPerItem && b < a) &&
+            !skip(a, b)) {
           visit(a, b);
         }
       });
@@ -149,7 +158,7 @@ void SpatialHash::forEachOverlappingPairIn(std::size_t first_bucket, std::size_t
         const Entry& second = entries_[t];
         if (second.cell != first.cell) continue;  // another cell in the same bucket
         const int b = second.item;
-        if (!overlap(lo_[a], hi_[a], lo_[b], hi_[b])) continue;
+        if (skip(a, b) || !overlap(lo_[a], hi_[a], lo_[b], hi_[b])) continue;
         // Reported from the cell holding the lower corner of the intersection only.
         if (lo_cell_[a].cwiseMax(lo_cell_[b]) != first.cell) continue;
         visit(a, b);

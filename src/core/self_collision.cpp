@@ -185,6 +185,12 @@ void SelfCollision::reserve(const Particles& particles, const ClothTopology& top
   std::sort(edges_.begin(), edges_.end());
   edges_.erase(std::unique(edges_.begin(), edges_.end()), edges_.end());
   const int edges = static_cast<int>(edges_.size());
+  edge_grid_.clear();
+  if (!topology.from_mesh && topology.cols > 0) {
+    const int cols = topology.cols;
+    for (const auto& [a, b] : edges_)
+      edge_grid_.push_back({a / cols, a % cols, b / cols, b % cols});
+  }
   triangle_hash_.reserve(triangles);
   edge_hash_.reserve(edges);
   grown_lo_.reserve(particles.cloth_count);
@@ -399,9 +405,22 @@ void SelfCollision::findEdgeEdgePairs(const Particles& p, const ClothTopology& t
     }
     into.push_back(pair);
   };
+  // On a grid, the neighbours' pairs (most of those whose boxes overlap) are left out by their
+  // rows and columns before the boxes are read.
+  auto neighbours = [this](int e, int f) {
+    if (edge_grid_.empty()) return false;
+    const std::array<int, 4>& u = edge_grid_[e];
+    const std::array<int, 4>& v = edge_grid_[f];
+    auto near_grid = [](int r0, int c0, int r1, int c1) {
+      return std::abs(r0 - r1) <= 1 && std::abs(c0 - c1) <= 1;
+    };
+    return near_grid(u[0], u[1], v[0], v[1]) || near_grid(u[0], u[1], v[2], v[3]) ||
+           near_grid(u[2], u[3], v[0], v[1]) || near_grid(u[2], u[3], v[2], v[3]);
+  };
   const int threads = pool != nullptr ? pool->threads() : 1;
   if (threads == 1) {
-    edge_hash_.forEachOverlappingPair([&](int e, int f) { keep(e, f, found); });
+    edge_hash_.forEachOverlappingPairIn(0, edge_hash_.bucketCount(), true, neighbours,
+                                        [&](int e, int f) { keep(e, f, found); });
     return;
   }
   // Threads take consecutive ranges of the hash's buckets, the first also the overflow boxes:
@@ -410,7 +429,7 @@ void SelfCollision::findEdgeEdgePairs(const Particles& p, const ClothTopology& t
   const std::size_t buckets = edge_hash_.bucketCount();
   auto job = [&](int t) {
     const std::size_t first = buckets * t / threads, end = buckets * (t + 1) / threads;
-    edge_hash_.forEachOverlappingPairIn(first, end, t == 0,
+    edge_hash_.forEachOverlappingPairIn(first, end, t == 0, neighbours,
                                         [&](int e, int f) { keep(e, f, thread_pairs_[t]); });
   };
   pool->run(job);
