@@ -233,6 +233,17 @@ void validateCloth(const ClothConfig& c) {
   checkNumber("cloth.stretch_compliance", c.stretch_compliance, kNonNegative);
   checkFinite("cloth.bend_compliance", c.bend_compliance);
   checkNumber("cloth.thickness", c.thickness, kPositive);
+  // A self-colliding grid thicker than its spacing: every particle's sphere reaches into its
+  // neighbours', and every vertex lies within h of the triangles around it, so the self-collision
+  // search lists most of the cloth against most of it (a step's work and memory grow with the
+  // square of the particle count).
+  if (c.self_collision && c.mesh.empty() && c.rows >= 2 && c.cols >= 2 &&
+      !(c.thickness < c.spacing)) {
+    throw ConfigError("cloth.thickness", "must be below cloth.spacing (" +
+                                             std::to_string(c.spacing) +
+                                             ") when cloth.self_collision is true, got " +
+                                             std::to_string(c.thickness));
+  }
   checkFriction("cloth.friction", c.friction);
   for (std::size_t k = 0; k < c.pinned.size(); ++k) {
     checkParticleIndex(indexed("cloth.pinned", k), c.pinned[k], count);

@@ -316,12 +316,19 @@ void SelfCollision::findVertexTrianglePairs(const Particles& p, const ClothTopol
       const int a = static_cast<int>(tri[3 * t]), b = static_cast<int>(tri[3 * t + 1]),
                 c = static_cast<int>(tri[3 * t + 2]);
       if (v == a || v == b || v == c || allKinematic(p, v, a, b, c)) return;
-      // The paths' cull (findPairs).
+      // The paths' cull (findPairs), where it can drop the pair at all: the distance is at
+      // most the diagonal of the two boxes together (a thickness as large as the cloth would
+      // otherwise add its cost to every pair of a search that lists them all).
       const double reach =
           thickness + deviation[v] + std::max({deviation[a], deviation[b], deviation[c]}) +
           std::sqrt(std::max({(move[v] - move[a]).squaredNorm(), (move[v] - move[b]).squaredNorm(),
                               (move[v] - move[c]).squaredNorm()}));
-      if (pointTriangleDistance(x[v], x[a], x[b], x[c]) > reach) return;
+      const Vec3 span =
+          grown_hi_[v].cwiseMax(triangle_hi_[t]) - grown_lo_[v].cwiseMin(triangle_lo_[t]);
+      if (reach * reach < span.squaredNorm() &&
+          pointTriangleDistance(x[v], x[a], x[b], x[c]) > reach) {
+        return;
+      }
       ContactGeometry start;
       if (!vertexTriangle(p.step_start[v], p.step_start[a], p.step_start[b], p.step_start[c],
                           start)) {
@@ -392,7 +399,11 @@ void SelfCollision::findEdgeEdgePairs(const Particles& p, const ClothTopology& t
         thickness + std::max(deviation[a], deviation[b]) + std::max(deviation[c], deviation[d]) +
         std::sqrt(std::max({(move[a] - move[c]).squaredNorm(), (move[a] - move[d]).squaredNorm(),
                             (move[b] - move[c]).squaredNorm(), (move[b] - move[d]).squaredNorm()}));
-    if (segmentSegmentDistance(x[a], x[b], x[c], x[d]) > reach) return;
+    const Vec3 span = edge_hi_[e].cwiseMax(edge_hi_[f]) - edge_lo_[e].cwiseMin(edge_lo_[f]);
+    if (reach * reach < span.squaredNorm() &&
+        segmentSegmentDistance(x[a], x[b], x[c], x[d]) > reach) {
+      return;
+    }
     SelfContactPair pair;
     pair.index[0] = a;
     pair.index[1] = b;

@@ -393,6 +393,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadValue{"cloth.stretch_compliance=-1e-6", "cloth.stretch_compliance", ">= 0"},
         BadValue{"cloth.bend_compliance=.inf", "cloth.bend_compliance", "finite"},
         BadValue{"cloth.thickness=0", "cloth.thickness", "> 0"},
+        BadValue{"cloth.thickness=0.5", "cloth.thickness", "below cloth.spacing"},
         BadValue{"cloth.self_collision=2", "cloth.self_collision", "true or false"},
         BadValue{"cloth.friction.static=-1", "cloth.friction.static", ">= 0"},
         BadValue{"cloth.friction.kinetic=0.6", "cloth.friction.kinetic", "[0, 0.5]"},
