@@ -145,9 +145,9 @@ class Collisions {
   void computeSweptBoxes(const Particles& particles, double box_time, double path_time,
                          double fraction);
   void findCandidates(const Particles& particles, const ClothTopology& topology, bool step_start);
-  // Whether a particle left its swept box or (self-collision) its reference path: the search's
-  // candidates then no longer cover every contact.
-  bool leftMotionBounds(const Particles& particles) const;
+  // Whether a particle left its swept box or (with `paths`: self-collision is active) a cloth
+  // particle its reference path: the search's candidates then no longer cover every contact.
+  bool leftMotionBounds(const Particles& particles, bool paths) const;
   void preStabilizeObstacles(Particles& particles, double max_shift);
   double projectObstaclesAndBounds(Particles& particles);
   // The same for particles [begin, end).
@@ -197,10 +197,9 @@ class Collisions {
   // The second motion bound (self-collision): each particle's reference path, a straight line
   // from path_start_ (where it was at the search, fraction path_fraction_ of the step) to
   // path_start_ + path_move_ (its free flight to the step end), which it may leave by at most
-  // path_deviation_ (kBoxSlack times its radius) while the search stands.
+  // kBoxSlack times its radius while the search stands.
   Vec3Array path_start_;
   Vec3Array path_move_;
-  std::vector<double> path_deviation_;
   double path_fraction_ = 0.0;
   double substep_end_ = 0.0;
   ParticleContacts particle_contacts_;

@@ -35,14 +35,14 @@ namespace pbd_cloth {
 
 // How far each particle may move during the rest of the step, while the broad phase's candidates
 // stand (Collisions::computeSweptBoxes): within its swept box [lo, hi], and within
-// path_deviation of its reference path, the line from path_start (where it is at the search) to
-// path_start + path_move (at the step end).
+// path_slack times its radius of its reference path, the line from path_start (where it is at the
+// search) to path_start + path_move (at the step end).
 struct MotionBounds {
   const Vec3Array& lo;
   const Vec3Array& hi;
   const Vec3Array& path_start;
   const Vec3Array& path_move;
-  const std::vector<double>& path_deviation;
+  double path_slack;
 };
 
 struct SelfContactPair {

@@ -132,7 +132,6 @@ void Collisions::prepare(const Particles& particles, const ClothTopology& topolo
   stats_ = CollisionStats();
   path_start_.assign(n, Vec3::Zero());
   path_move_.assign(n, Vec3::Zero());
-  path_deviation_.assign(n, 0.0);
   computeSweptBoxes(particles, 0.0, 0.0, 0.0);
   findCandidates(particles, topology, true);
 }
@@ -174,7 +173,6 @@ void Collisions::computeSweptBoxes(const Particles& p, double box_time, double p
       path_move_[i] = path_time * p.velocity[i] + (0.5 * path_time * path_time) * gravity_;
     }
     path_start_[i] = x;
-    path_deviation_[i] = kBoxSlack * p.radius[i];
     Vec3 lo = x.cwiseMin(end), hi = x.cwiseMax(end);
     if (mid_step) {
       lo = lo.cwiseMin(p.substep_start[i]);
@@ -191,7 +189,7 @@ void Collisions::findCandidates(const Particles& particles, const ClothTopology&
     particle_contacts_.findPairs(particles, box_lo_, box_hi_, !step_start);
   }
   if (selfCollisionActive(topology)) {
-    const MotionBounds bounds{box_lo_, box_hi_, path_start_, path_move_, path_deviation_};
+    const MotionBounds bounds{box_lo_, box_hi_, path_start_, path_move_, kBoxSlack};
     self_collision_pairs_.findPairs(particles, topology, bounds, thickness_, step_start, pool_);
   }
   stats_.particle_pairs = particle_contacts_.pairCount();
@@ -202,20 +200,21 @@ void Collisions::findCandidates(const Particles& particles, const ClothTopology&
   ++stats_.broad_phase_runs;
 }
 
-bool Collisions::leftMotionBounds(const Particles& p) const {
+bool Collisions::leftMotionBounds(const Particles& p, bool paths) const {
   for (int i = 0; i < p.size(); ++i) {
     const Vec3& x = p.position[i];
     if (!((x.array() >= box_lo_[i].array()).all() && (x.array() <= box_hi_[i].array()).all())) {
       return true;
     }
   }
-  if (!self_collision_) return false;
+  if (!paths) return false;
   // The predicted positions are those of the substep's end: that far along the reference paths.
   const double span = 1.0 - path_fraction_;
   const double along = span > 0.0 ? std::min(1.0, (substep_end_ - path_fraction_) / span) : 1.0;
   for (int i = 0; i < p.cloth_count; ++i) {
     const Vec3 off_path = p.position[i] - (path_start_[i] + along * path_move_[i]);
-    if (off_path.squaredNorm() > path_deviation_[i] * path_deviation_[i]) return true;
+    const double deviation = kBoxSlack * p.radius[i];
+    if (off_path.squaredNorm() > deviation * deviation) return true;
   }
   return false;
 }
@@ -279,7 +278,7 @@ double Collisions::project(Particles& particles, const ClothTopology& topology) 
     // First pass of a substep: the prediction is done. A particle outside its swept box may meet
     // contacts the broad phase did not list: find them again for the rest of the step.
     checked_substep_ = substep_;
-    if ((particle_contacts || self_collision) && leftMotionBounds(particles)) {
+    if ((particle_contacts || self_collision) && leftMotionBounds(particles, self_collision)) {
       computeSweptBoxes(particles, (1.0 - substep_begin_) * dt_, (1.0 - substep_end_) * dt_,
                         substep_end_);
       findCandidates(particles, topology, false);
@@ -335,10 +334,6 @@ void Collisions::preStabilizeObstacles(Particles& p, double max_shift) {
   }
 }
 
-// Particle-environment contact (seed eq. plane_constraint, extended to any shape through its
-// signed distance): C = distance(x) - r >= 0, the full correction to the particle since the shape
-// is immovable, along the surface normal. Swept in the shape's frame for no tunnelling (see
-// collisions.h), followed by friction relative to the shape's own motion over the substep.
 // Obstacles, then the bounds. Each touches only the particle it projects (and the obstacles its
 // own contact slots), so with threads (solver.threads) each takes a consecutive range of
 // particles: the same result for every count.
@@ -359,6 +354,10 @@ double Collisions::projectObstaclesAndBounds(Particles& p) {
   return *std::max_element(max_change, max_change + threads);
 }
 
+// Particle-environment contact (seed eq. plane_constraint, extended to any shape through its
+// signed distance): C = distance(x) - r >= 0, the full correction to the particle since the shape
+// is immovable, along the surface normal. Swept in the shape's frame for no tunnelling (see
+// collisions.h), followed by friction relative to the shape's own motion over the substep.
 double Collisions::projectObstaclesOf(Particles& p, int begin, int end) {
   const std::size_t count = shapes_.size();
   if (count == 0) return 0.0;

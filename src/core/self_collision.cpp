@@ -297,7 +297,8 @@ void SelfCollision::findVertexTrianglePairs(const Particles& p, const ClothTopol
                                             WorkerPool* pool, std::vector<SelfContactPair>& found) {
   const Vec3Array& x = bounds.path_start;
   const Vec3Array& move = bounds.path_move;
-  const std::vector<double>& deviation = bounds.path_deviation;
+  // How far each particle may leave its path.
+  auto deviation = [&](int i) { return bounds.path_slack * p.radius[i]; };
   const auto& tri = topology.triangles;
   const int triangles = topology.triangleCount();
   triangle_lo_.resize(triangles);
@@ -320,7 +321,7 @@ void SelfCollision::findVertexTrianglePairs(const Particles& p, const ClothTopol
       // most the diagonal of the two boxes together (a thickness as large as the cloth would
       // otherwise add its cost to every pair of a search that lists them all).
       const double reach =
-          thickness + deviation[v] + std::max({deviation[a], deviation[b], deviation[c]}) +
+          thickness + deviation(v) + std::max({deviation(a), deviation(b), deviation(c)}) +
           std::sqrt(std::max({(move[v] - move[a]).squaredNorm(), (move[v] - move[b]).squaredNorm(),
                               (move[v] - move[c]).squaredNorm()}));
       const Vec3 span =
@@ -364,7 +365,7 @@ void SelfCollision::findEdgeEdgePairs(const Particles& p, const ClothTopology& t
                                       WorkerPool* pool, std::vector<SelfContactPair>& found) {
   const Vec3Array& x = bounds.path_start;
   const Vec3Array& move = bounds.path_move;
-  const std::vector<double>& deviation = bounds.path_deviation;
+  auto deviation = [&](int i) { return bounds.path_slack * p.radius[i]; };
   // Edges of one grid cell or of neighbouring cells (some end points within one row and column)
   // are left out: nearly coplanar while the cloth is smooth, they would get a side by chance, and
   // folding them onto each other is already stopped by the vertex-triangle contacts.
@@ -396,7 +397,7 @@ void SelfCollision::findEdgeEdgePairs(const Particles& p, const ClothTopology& t
     // The paths' cull (findPairs), for points of the two edges: convex combinations of a, b and
     // of c, d.
     const double reach =
-        thickness + std::max(deviation[a], deviation[b]) + std::max(deviation[c], deviation[d]) +
+        thickness + std::max(deviation(a), deviation(b)) + std::max(deviation(c), deviation(d)) +
         std::sqrt(std::max({(move[a] - move[c]).squaredNorm(), (move[a] - move[d]).squaredNorm(),
                             (move[b] - move[c]).squaredNorm(), (move[b] - move[d]).squaredNorm()}));
     const Vec3 span = edge_hi_[e].cwiseMax(edge_hi_[f]) - edge_lo_[e].cwiseMin(edge_lo_[f]);
