@@ -150,9 +150,10 @@ class Collisions {
   bool leftMotionBounds(const Particles& particles, bool paths) const;
   void preStabilizeObstacles(Particles& particles, double max_shift);
   double projectObstaclesAndBounds(Particles& particles);
-  // The same for particles [begin, end).
-  double projectObstaclesOf(Particles& particles, int begin, int end);
-  double projectBoundsOf(Particles& particles, int begin, int end) const;
+  // The obstacles' contacts of free particle i (first_pass: the substep's first pass), and the
+  // bounds' clamp of a free particle's position.
+  double projectObstaclesOn(Particles& particles, int i, bool first_pass);
+  double projectBoundsOn(Vec3& x) const;
   bool particleContactsActive(const Particles& particles) const;
   bool selfCollisionActive(const ClothTopology& topology) const;
 
@@ -187,9 +188,10 @@ class Collisions {
   // Step and substep.
   double dt_ = 0.0;
   double substep_begin_ = 0.0;
-  int step_ = 0;              // stamp of the current step (ContactState::window)
-  int substep_ = 0;           // stamp of the current substep (ContactState::substep)
-  int checked_substep_ = -1;  // substep whose particles were checked against their swept boxes
+  int step_ = 0;                  // stamp of the current step (ContactState::window)
+  int substep_ = 0;               // stamp of the current substep (ContactState::substep)
+  int checked_substep_ = -1;      // substep whose particles were checked against their swept boxes
+  int environment_substep_ = -1;  // substep of the last obstacle and bounds pass
 
   // Broad phase of the step.
   Vec3Array box_lo_;  // swept box of each particle over the (rest of the) step

@@ -15,20 +15,29 @@
 
 namespace pbd_cloth {
 
-// What a step fixes for each hinge c (Solver::prepareBendStep): inverse_denominator[c] = 1 / (w +
-// alpha~) (0: no free corner, skipped), factor[4c + k] = w_k K_k, largest_factor[c] = max_k
-// |factor[4c + k]|.
-struct FlatHingeStep {
-  const double* inverse_denominator = nullptr;
-  const double* factor = nullptr;
-  const double* largest_factor = nullptr;
+// What a step fixes for one hinge (Solver::prepareBendStep), so that a projection is a few
+// multiply-adds: with w = scale^2 sum_k w_k K_k^2 and D = w + alpha~ (PBD: D = w, alpha~ = 0),
+//   dlambda = sum_{k=1..3} gain_k (x_k - x_0) - decay lambda,  gain_k = -k scale K_k / D,
+//                                                              decay = alpha~ / D,
+// which is XPBD's (-k C - alpha~ lambda) / D for C = scale b, and each corner moves by
+// move_k dlambda, move_k = w_k K_k scale. largest_move = max_k |move_k|; 0: no free corner
+// (skipped). The corners are four different particles (makeBendConstraint refuses a hinge whose
+// two triangles are one), so a hinge's corners can be read once and written once.
+struct FlatHinge {
+  int index[4] = {0, 0, 0, 0};
+  double gain[3] = {0.0, 0.0, 0.0};
+  double decay = 0.0;
+  double move[4] = {0.0, 0.0, 0.0, 0.0};
+  double largest_move = 0.0;
 };
 
 // One Gauss-Seidel sweep over hinges [0, count) in order: x the positions (x0 y0 z0 x1 ...),
-// lambda three multipliers per hinge (accumulated). k: PBD's pass stiffness (1 for XPBD), alpha:
-// alpha~ as given to the step's denominators. Returns the largest corner move (m). simd false:
-// the portable loop even where AVX2 is there. Allocates nothing.
-double projectFlatHinges(const BendConstraint* bend, int count, const FlatHingeStep& step, double k,
-                         double alpha, bool simd, double* x, double* lambda);
+// lambda three multipliers per hinge (accumulated; lambda_from_zero: the substep's first pass,
+// whose multipliers start at zero: they are written, not read, so nobody need zero them first).
+// Returns the largest corner move (m) when track_change (only solver.tolerance's adaptive count
+// reads it), else 0 without computing it. simd false: the portable loop even where AVX2 is
+// there. Allocates nothing.
+double projectFlatHinges(const FlatHinge* hinge, int count, bool lambda_from_zero,
+                         bool track_change, bool simd, double* x, double* lambda);
 
 }  // namespace pbd_cloth

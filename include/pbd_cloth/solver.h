@@ -3,10 +3,12 @@
 // allocates nothing.
 #pragma once
 
+#include <limits>
 #include <vector>
 
 #include "pbd_cloth/coarse_levels.h"
 #include "pbd_cloth/collisions.h"
+#include "pbd_cloth/flat_hinges.h"
 #include "pbd_cloth/particles.h"
 #include "pbd_cloth/scene_config.h"
 #include "pbd_cloth/stretch_links.h"
@@ -67,8 +69,9 @@ class Solver {
   double projectPass(double h, Particles& p, const ClothTopology& topology, Collisions& collisions,
                      bool first_pass);
   double projectStretch(double h, Particles& p, const ClothTopology& topology);
-  double projectBend(double h, Particles& p, const ClothTopology& topology);
-  double projectFlatBend(Particles& p, const ClothTopology& topology, double alpha, double k);
+  double projectBend(double h, Particles& p, const ClothTopology& topology, bool first_pass);
+  double projectFlatBend(Particles& p, const ClothTopology& topology, bool first_pass);
+  bool flatBend(const ClothTopology& topology) const;
   void prepareBendStep(const Particles& p, const ClothTopology& topology, double h);
   double projectTethers(Particles& p, const ClothTopology& topology);
   void applyJacobi(Particles& p, double& max_change);
@@ -79,7 +82,7 @@ class Solver {
   double stretchAlpha(double h) const;
   double dampingFactor(double h) const;
   void countJacobiConstraints(const Particles& p, const ClothTopology& topology);
-  void startReactions(const Particles& p, const ClothTopology& topology);
+  void startReactions(const Particles& p, const ClothTopology& topology, bool list);
   void addMultiplierReactions(const Particles& p, const ClothTopology& topology);
   void finishReactions(double dt, double h, const Particles& p, const Collisions& collisions);
   double jacobiScale(int i, int j) const;
@@ -102,11 +105,14 @@ class Solver {
   bool fastStretch(const ClothTopology& topology) const;
   double stretchLambda(int c, const ClothTopology& topology) const;
   Vec3Array bend_lambda_;  // one vector per hinge: C = scale b is vector-valued
-  // Per step (prepareBendStep): each hinge's 1 / (w + alpha~), its vertices' w_k K_k and the
-  // largest of those (the largest move per unit of direction).
-  std::vector<double> bend_inverse_denominator_;
-  std::vector<double> bend_factor_;
-  std::vector<double> bend_largest_factor_;
+  // Per step (prepareBendStep): what the step fixes for each hinge of a flat rest shape
+  // (flat_hinges.h); empty for hinges with a rest curvature (mesh cloths).
+  std::vector<FlatHinge> flat_hinges_;
+  // What the step preparations (the links' and hinges' per-step terms, the kinematic lists) were
+  // made for: they stand while h and the inverse masses are the same. NaN: to be made.
+  static constexpr double kNotPrepared = std::numeric_limits<double>::quiet_NaN();
+  double prepared_h_ = kNotPrepared;
+  std::vector<double> prepared_inverse_mass_;
   Vec3Array jacobi_delta_;         // Jacobi: summed corrections per particle
   std::vector<int> jacobi_count_;  // Jacobi: stretch and bend constraints on each free particle
   Vec3Array force_;                // mass_spring: force accumulator

@@ -374,6 +374,9 @@ void buildMeshTethers(const Particles& particles, const ClothTopology& topology,
 
 bool makeBendConstraint(const Vec3Array& rest, int i0, int i1, int i2, int i3,
                         BendConstraint& out) {
+  // The two triangles are one (a mesh listing a triangle twice): no hinge, and the projection
+  // may take a hinge's four corners to be four particles (flat_hinges.h).
+  if (i0 == i1 || i2 == i3 || i2 == i0 || i2 == i1 || i3 == i0 || i3 == i1) return false;
   const Vec3 &x0 = rest[i0], &x1 = rest[i1], &x2 = rest[i2], &x3 = rest[i3];
   const Vec3 e0 = x1 - x0, e1 = x2 - x0, e2 = x3 - x0, e3 = x2 - x1, e4 = x3 - x1;
   const double area0 = 0.5 * e0.cross(e1).norm();

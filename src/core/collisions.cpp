@@ -26,6 +26,12 @@ bool outsideBounds(const Vec3& x, double r, const Vec3& lo, const Vec3& hi) {
   return (x.array() + r < lo.array()).any() || (x.array() - r > hi.array()).any();
 }
 
+// True when the boxes [a_lo, a_hi] and [b_lo, b_hi] share no point.
+bool boxesApart(const Eigen::Array3d& a_lo, const Eigen::Array3d& a_hi, const Vec3& b_lo,
+                const Vec3& b_hi) {
+  return (a_hi < b_lo.array()).any() || (a_lo > b_hi.array()).any();
+}
+
 }  // namespace
 
 void Collisions::configure(const SceneConfig& scene) {
@@ -128,6 +134,7 @@ void Collisions::prepare(const Particles& particles, const ClothTopology& topolo
   self_collision_pairs_.reserve(particles, topology);
   substep_ = step_ = 0;
   checked_substep_ = -1;
+  environment_substep_ = -1;
   dt_ = 0.0;
   stats_ = CollisionStats();
   path_start_.assign(n, Vec3::Zero());
@@ -224,6 +231,7 @@ void Collisions::beginStep(Particles& particles, const ClothTopology& topology, 
   ++step_;
   stats_.broad_phase_runs = 0;
   checked_substep_ = -1;
+  environment_substep_ = -1;
   std::fill(kinematic_reaction_.begin(), kinematic_reaction_.end(), Vec3::Zero());
   for (std::size_t k = 0; k < obstacles_.size(); ++k) {
     frame_begin_[k] = frame_end_[k] = frameFromPose(obstacles_[k].pose);
@@ -255,6 +263,7 @@ void Collisions::setSubstepFraction(double s_begin, double s_end) {
   if (substep_ == INT_MAX) {
     // Stamps wrap after 2^31 substeps (weeks of running): forget every state, none is current.
     substep_ = step_ = 0;
+    environment_substep_ = -1;
     for (ContactState& state : obstacle_contacts_) state.forget();
   }
   ++substep_;
@@ -341,8 +350,17 @@ double Collisions::projectObstaclesAndBounds(Particles& p) {
   if (shapes_.empty() && !bounds_.enabled) return 0.0;
   const int threads =
       pool_ != nullptr && p.size() >= 2 * kParticlesPerThread ? pool_->threads() : 1;
+  // The first pass of a substep: no contact has pushed in it yet.
+  const bool first_pass = environment_substep_ != substep_;
+  environment_substep_ = substep_;
   auto range = [&](int begin, int end) {
-    return std::max(projectObstaclesOf(p, begin, end), projectBoundsOf(p, begin, end));
+    double max_change = 0.0;
+    for (int i = begin; i < end; ++i) {
+      if (p.inverse_mass[i] == 0.0) continue;  // kinematic: prescribed, left alone
+      max_change = std::max(max_change, projectObstaclesOn(p, i, first_pass));
+      max_change = std::max(max_change, projectBoundsOn(p.position[i]));
+    }
+    return max_change;
   };
   if (threads == 1) return range(0, p.size());
   double* max_change = thread_max_change_;
@@ -358,97 +376,96 @@ double Collisions::projectObstaclesAndBounds(Particles& p) {
 // signed distance): C = distance(x) - r >= 0, the full correction to the particle since the shape
 // is immovable, along the surface normal. Swept in the shape's frame for no tunnelling (see
 // collisions.h), followed by friction relative to the shape's own motion over the substep.
-double Collisions::projectObstaclesOf(Particles& p, int begin, int end) {
+double Collisions::projectObstaclesOn(Particles& p, int i, bool first_pass) {
   const std::size_t count = shapes_.size();
-  if (count == 0) return 0.0;
   double max_change = 0.0;
-  for (int i = begin; i < end; ++i) {
-    if (p.inverse_mass[i] == 0.0) continue;
-    Vec3& x = p.position[i];
-    const double r = p.radius[i];
-    for (std::size_t k = 0; k < count; ++k) {
-      if (!enabled_[k]) continue;
-      const std::size_t slot = static_cast<std::size_t>(i) * count + k;
-      ContactState& state = obstacle_contacts_[slot];
-      const bool pushed = state.substep == substep_ && state.depth > 0.0;
-      // Cheap cull: a particle whose path of this substep stays out of the obstacle's bounds
-      // (grown by its radius) cannot touch it.
-      const double reach = r + (x - p.substep_start[i]).norm();
-      if (!pushed && outsideBounds(x, reach, obstacle_lo_[k], obstacle_hi_[k])) continue;
-      const Shape& shape = shapes_[k];
-      const Frame& begin = frame_begin_[k];
-      const Frame& end = frame_end_[k];
-      const Vec3 b = end.toLocal(x);  // where the particle is, relative to the shape now
-      const Vec3 a = begin.toLocal(p.substep_start[i]);  // ... and where it was
-      const bool mesh = shape.type == ShapeType::kMesh;
-      if (mesh && !pushed) {
-        // A mesh query costs a tree search; the last one bounds this one for free. The distance
-        // is 1-Lipschitz, so d(b) >= d(b_last) - |b - b_last| (local frame): when even that
-        // bound clears the segment, the test below would skip it too.
-        const double lower = mesh_distance_[slot] - (b - mesh_point_[slot]).norm() - r;
-        if (lower >= (b - a).norm()) continue;
+  Vec3& x = p.position[i];
+  const Vec3& start = p.substep_start[i];
+  const double r = p.radius[i];
+  for (std::size_t k = 0; k < count; ++k) {
+    if (!enabled_[k]) continue;
+    const std::size_t slot = static_cast<std::size_t>(i) * count + k;
+    // Cheap cull: a particle whose path of this substep (the segment from its start, in the box
+    // of its ends grown by its radius) stays out of the obstacle's bounds cannot touch it, unless
+    // it was pushed out earlier in this substep (never so in its first pass).
+    if (boxesApart(x.cwiseMin(start).array() - r, x.cwiseMax(start).array() + r, obstacle_lo_[k],
+                   obstacle_hi_[k])) {
+      if (first_pass) continue;
+      const ContactState& state = obstacle_contacts_[slot];
+      if (!(state.substep == substep_ && state.depth > 0.0)) continue;
+    }
+    ContactState& state = obstacle_contacts_[slot];
+    const bool pushed = state.substep == substep_ && state.depth > 0.0;
+    const Shape& shape = shapes_[k];
+    const Frame& begin = frame_begin_[k];
+    const Frame& end = frame_end_[k];
+    const Vec3 b = end.toLocal(x);  // where the particle is, relative to the shape now
+    const Vec3 a = begin.toLocal(p.substep_start[i]);  // ... and where it was
+    const bool mesh = shape.type == ShapeType::kMesh;
+    if (mesh && !pushed) {
+      // A mesh query costs a tree search; the last one bounds this one for free. The distance
+      // is 1-Lipschitz, so d(b) >= d(b_last) - |b - b_last| (local frame): when even that
+      // bound clears the segment, the test below would skip it too.
+      const double lower = mesh_distance_[slot] - (b - mesh_point_[slot]).norm() - r;
+      if (lower >= (b - a).norm()) continue;
+    }
+    Vec3 normal_b;
+    int* hint = &mesh_hint_[slot];
+    const double clearance = signedDistance(shape, b, normal_b, hint) - r;
+    if (mesh) {
+      mesh_distance_[slot] = clearance + r;
+      mesh_point_[slot] = b;
+    }
+    // The distance is 1-Lipschitz: a segment whose end is farther from the surface than its
+    // length never touched the shape (unless it was pushed out earlier in this substep).
+    if (clearance >= (b - a).norm() && !pushed) continue;
+    Vec3 normal_a;
+    const double start_distance = signedDistance(shape, a, normal_a, hint);
+    // The window's base is the particle's place on the shape when it began: carried by the
+    // shape, it is the point under the particle that friction holds it to.
+    if (state.beginSubstep(substep_, step_, start_distance < (1.0 + kTouchGap) * r)) {
+      state.base = a;
+    }
+    const double allowance = obstacle_allowance_[slot];
+    double c = clearance;
+    Vec3 normal = normal_b;
+    double t = 0.0;
+    Vec3 normal_entry;
+    if (allowance > 0.0) {
+      c = clearance + allowance;  // started inside: only not deeper
+    } else if (sweepSphere(shape, a, b, r, start_distance, normal_a, t, normal_entry, hint)) {
+      if (!(clearance < 0.0 && normal_b.dot(normal_entry) > 0.0)) {
+        // Crossed or cut through: back onto the tangent plane where the sphere entered.
+        c = (b - (a + t * (b - a))).dot(normal_entry);
+        normal = normal_entry;
       }
-      Vec3 normal_b;
-      int* hint = &mesh_hint_[slot];
-      const double clearance = signedDistance(shape, b, normal_b, hint) - r;
-      if (mesh) {
-        mesh_distance_[slot] = clearance + r;
-        mesh_point_[slot] = b;
-      }
-      // The distance is 1-Lipschitz: a segment whose end is farther from the surface than its
-      // length never touched the shape (unless it was pushed out earlier in this substep).
-      if (clearance >= (b - a).norm() && !pushed) continue;
-      Vec3 normal_a;
-      const double start_distance = signedDistance(shape, a, normal_a, hint);
-      // The window's base is the particle's place on the shape when it began: carried by the
-      // shape, it is the point under the particle that friction holds it to.
-      if (state.beginSubstep(substep_, step_, start_distance < (1.0 + kTouchGap) * r)) {
-        state.base = a;
-      }
-      const double allowance = obstacle_allowance_[slot];
-      double c = clearance;
-      Vec3 normal = normal_b;
-      double t = 0.0;
-      Vec3 normal_entry;
-      if (allowance > 0.0) {
-        c = clearance + allowance;  // started inside: only not deeper
-      } else if (sweepSphere(shape, a, b, r, start_distance, normal_a, t, normal_entry, hint)) {
-        if (!(clearance < 0.0 && normal_b.dot(normal_entry) > 0.0)) {
-          // Crossed or cut through: back onto the tangent plane where the sphere entered.
-          c = (b - (a + t * (b - a))).dot(normal_entry);
-          normal = normal_entry;
-        }
-      }
-      if (c < 0.0 || state.depth > 0.0) {
-        const Vec3 n = end.rotation * normal;
-        const double push = contactIncrement(c, state);
-        x += push * n;
-        state.normal = n;
-        max_change = std::max(max_change, std::abs(push));
-      }
-      if (state.frictionDepth() > 0.0) {
-        // The shape carries the point under the particle along with it: the relative
-        // displacement is measured from there, so a moving shape drags what rests on it.
-        x += frictionCorrection(x - end.toWorld(state.base), state, obstacle_friction_[k]);
-      }
+    }
+    if (c < 0.0 || state.depth > 0.0) {
+      const Vec3 n = end.rotation * normal;
+      const double push = contactIncrement(c, state);
+      x += push * n;
+      state.normal = n;
+      max_change = std::max(max_change, std::abs(push));
+    }
+    if (state.frictionDepth() > 0.0) {
+      // The shape carries the point under the particle along with it: the relative
+      // displacement is measured from there, so a moving shape drags what rests on it.
+      x += frictionCorrection(x - end.toWorld(state.base), state, obstacle_friction_[k]);
     }
   }
   return max_change;
 }
 
-// The seed's box (C1): x_i = min(max(x_i, min), max), component-wise. Kinematic particles are
-// prescribed and left alone.
-double Collisions::projectBoundsOf(Particles& particles, int begin, int end) const {
+// The seed's box (C1): x_i = min(max(x_i, min), max), component-wise.
+double Collisions::projectBoundsOn(Vec3& x) const {
   if (!bounds_.enabled) return 0.0;
-  double max_change = 0.0;
-  for (int i = begin; i < end; ++i) {
-    if (particles.inverse_mass[i] == 0.0) continue;
-    Vec3& x = particles.position[i];
-    const Vec3 clamped = x.cwiseMax(bounds_.min).cwiseMin(bounds_.max);
-    max_change = std::max(max_change, (clamped - x).norm());
-    x = clamped;
+  if ((x.array() >= bounds_.min.array()).all() && (x.array() <= bounds_.max.array()).all()) {
+    return 0.0;  // inside (the usual case): no clamp, no square root
   }
-  return max_change;
+  const Vec3 clamped = x.cwiseMax(bounds_.min).cwiseMin(bounds_.max);
+  const double moved = (clamped - x).norm();
+  x = clamped;
+  return moved;
 }
 
 void Collisions::getColliderState(int collider, BodySnapshot& body) const {
@@ -497,6 +514,7 @@ void Collisions::setMeshContacts(const std::vector<MeshContactCache>& caches) {
 
 void Collisions::findCandidatesNow(const Particles& particles, const ClothTopology& topology) {
   checked_substep_ = -1;
+  environment_substep_ = -1;
   computeSweptBoxes(particles, 0.0, 0.0, 0.0);
   findCandidates(particles, topology, true);
 }

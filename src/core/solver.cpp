@@ -68,6 +68,7 @@ void Solver::configure(const SolverConfig& solver, const ClothConfig& cloth) {
   }
   stretch_compliance_ = cloth.stretch_compliance;
   bend_compliance_ = cloth.bend_compliance;
+  prepared_h_ = kNotPrepared;  // compliances, method or stiffness may have changed
   spacing_ = cloth.spacing;
   // A live change of solver.levels rebuilds them for the grid prepare() saw (not during a step).
   if (coarse_.rows() > 0 &&
@@ -78,15 +79,14 @@ void Solver::configure(const SolverConfig& solver, const ClothConfig& cloth) {
 
 void Solver::prepare(const Particles& particles, const ClothTopology& topology) {
   const int n = particles.size();
+  prepared_h_ = kNotPrepared;
   stretch_lambda_.assign(topology.stretch.size(), 0.0);
   const bool grid = topology.rows > 0 && !topology.from_mesh;
   stretch_links_.assign(topology.stretch, n, grid ? topology.rows : 0, grid ? topology.cols : 0);
   link_lambda_.assign(topology.stretch.size(), 0.0);
   splitTasks();
   bend_lambda_.assign(topology.bend.size(), Vec3::Zero());
-  bend_inverse_denominator_.assign(topology.bend.size(), 0.0);
-  bend_factor_.assign(4 * topology.bend.size(), 0.0);
-  bend_largest_factor_.assign(topology.bend.size(), 0.0);
+  flat_hinges_.assign(topology.bend_rest.empty() ? topology.bend.size() : 0, FlatHinge());
   jacobi_delta_.assign(n, Vec3::Zero());
   jacobi_count_.assign(n, 0);
   force_.assign(n, Vec3::Zero());
@@ -123,6 +123,13 @@ double Solver::stretchAlpha(double h) const {
 }
 
 // Gauss-Seidel stretch goes through stretch_links_ when they were built for this topology.
+// The hinges go through projectFlatBend: Gauss-Seidel, bending on, every hinge flat at rest.
+bool Solver::flatBend(const ClothTopology& topology) const {
+  return bend_compliance_ >= 0.0 && config_.method != Method::kMassSpring &&
+         config_.ordering != Ordering::kJacobi && topology.bend_rest.empty() &&
+         flat_hinges_.size() == topology.bend.size();
+}
+
 bool Solver::fastStretch(const ClothTopology& topology) const {
   return !topology.stretch.empty() &&
          stretch_links_.size() == static_cast<int>(topology.stretch.size());
@@ -374,7 +381,7 @@ double Solver::projectStretch(double h, Particles& p, const ClothTopology& topol
 // Isometric bending as the vector constraint C = scale b, b = sum_k K_k x_k (particles.h): linear
 // in the positions, grad_k C = scale K_k I. A flat hinge (b = 0) gets no correction; nothing is
 // divided by |b|, so there is no degenerate case.
-double Solver::projectBend(double h, Particles& p, const ClothTopology& topology) {
+double Solver::projectBend(double h, Particles& p, const ClothTopology& topology, bool first_pass) {
   if (bend_compliance_ < 0.0 || config_.method == Method::kMassSpring) return 0.0;
   const bool xpbd = config_.method == Method::kXpbd;
   const bool jacobi = config_.ordering == Ordering::kJacobi;
@@ -383,10 +390,8 @@ double Solver::projectBend(double h, Particles& p, const ClothTopology& topology
   const double k = xpbd ? 1.0 : pbdStiffness(config_.bend_stiffness);
   double max_change = 0.0;
   const int count = static_cast<int>(topology.bend.size());
+  if (flatBend(topology)) return projectFlatBend(p, topology, first_pass);
   const bool has_rest = !topology.bend_rest.empty();
-  if (!jacobi && !has_rest && bend_inverse_denominator_.size() == topology.bend.size()) {
-    return projectFlatBend(p, topology, alpha, k);
-  }
   for (int c = 0; c < count; ++c) {
     const BendConstraint& con = topology.bend[c];
     double w = 0.0;
@@ -433,21 +438,15 @@ double Solver::projectBend(double h, Particles& p, const ClothTopology& topology
 }
 
 // The hinges of a flat rest shape (every grid hinge) in Gauss-Seidel order, with what is fixed
-// for a step computed once in prepareBendStep: the generalized inverse mass w = scale^2 sum_k w_k
-// K_k^2 as 1 / (w + alpha~) (XPBD eq. 18; PBD: k / w with alpha~ = 0), and each vertex's w_k K_k.
-// The same projection as the loop of projectBend, with one division per hinge per step instead of
-// one per pass and no per-vertex weight arithmetic.
-double Solver::projectFlatBend(Particles& p, const ClothTopology& topology, double alpha,
-                               double k) {
+// for a step computed once in prepareBendStep (flat_hinges.h): the same projection as the loop of
+// projectBend, with no division and no per-vertex weight arithmetic in the pass.
+double Solver::projectFlatBend(Particles& p, const ClothTopology& topology, bool first_pass) {
   if (topology.bend.empty()) return 0.0;  // (and no multipliers to point at)
   double* x = p.position.front().data();
+  const bool track_change = config_.tolerance > 0.0;
   // Hinges [begin, end) in order.
   auto sweep = [&](int begin, int end) {
-    FlatHingeStep step;
-    step.inverse_denominator = bend_inverse_denominator_.data() + begin;
-    step.factor = bend_factor_.data() + 4 * static_cast<std::size_t>(begin);
-    step.largest_factor = bend_largest_factor_.data() + begin;
-    return projectFlatHinges(topology.bend.data() + begin, end - begin, step, k, alpha,
+    return projectFlatHinges(flat_hinges_.data() + begin, end - begin, first_pass, track_change,
                              config_.simd, x,
                              bend_lambda_.front().data() + 3 * static_cast<std::size_t>(begin));
   };
@@ -473,23 +472,36 @@ double Solver::projectFlatBend(Particles& p, const ClothTopology& topology, doub
   return max_change;
 }
 
+// XPBD's dlambda = (-k C - alpha~ lambda) / (w + alpha~) for C = scale b (eq. 18), split into
+// what the step fixes: gain_k = -k scale K_k / (w + alpha~) and decay = alpha~ / (w + alpha~);
+// corner k moves by w_k K_k scale dlambda (flat_hinges.h).
 void Solver::prepareBendStep(const Particles& p, const ClothTopology& topology, double h) {
   const int count = static_cast<int>(topology.bend.size());
-  if (static_cast<int>(bend_inverse_denominator_.size()) != count) return;
-  const double alpha = config_.method == Method::kXpbd ? bend_compliance_ / (h * h) : 0.0;
+  if (static_cast<int>(flat_hinges_.size()) != count) return;
+  const bool xpbd = config_.method == Method::kXpbd;
+  const double alpha = xpbd ? bend_compliance_ / (h * h) : 0.0;
+  const double k = xpbd ? 1.0 : pbdStiffness(config_.bend_stiffness);
   for (int c = 0; c < count; ++c) {
     const BendConstraint& con = topology.bend[c];
+    FlatHinge& hinge = flat_hinges_[c];
     double w = 0.0, largest = 0.0;
     for (int v = 0; v < 4; ++v) {
       const double wv = p.inverse_mass[con.index[v]];
       w += wv * con.weight[v] * con.weight[v];
-      bend_factor_[4 * c + v] = wv * con.weight[v];
-      largest = std::max(largest, std::abs(bend_factor_[4 * c + v]));
+      hinge.index[v] = con.index[v];
+      hinge.move[v] = wv * con.weight[v] * con.scale;
+      largest = std::max(largest, std::abs(hinge.move[v]));
     }
     w *= con.scale * con.scale;
-    bend_largest_factor_[c] = largest;
-    // PBD: dlambda = -k C / w = (-k C - 0 lambda) * (1 / w), k applied by the projection.
-    bend_inverse_denominator_[c] = w < kMinInverseMass ? 0.0 : 1.0 / (w + alpha);
+    if (w < kMinInverseMass) {
+      hinge = FlatHinge();  // no free corner: skipped (largest_move 0)
+      continue;
+    }
+    const double inverse_denominator = 1.0 / (w + alpha);
+    for (int v = 0; v < 3; ++v)
+      hinge.gain[v] = -k * con.scale * con.weight[v + 1] * inverse_denominator;
+    hinge.decay = alpha * inverse_denominator;
+    hinge.largest_move = largest;
   }
 }
 
@@ -656,7 +668,7 @@ void Solver::countJacobiConstraints(const Particles& p, const ClothTopology& top
 }
 
 double Solver::projectPass(double h, Particles& p, const ClothTopology& topology,
-                           Collisions& collisions, bool /*first_pass*/) {
+                           Collisions& collisions, bool first_pass) {
   // The count of the last pass is what the step reports: constraints still degenerate at its end.
   startDegenerateCount();
   // Long-range levels first (solver.levels): they remove in one projection a stretch spread over
@@ -667,7 +679,7 @@ double Solver::projectPass(double h, Particles& p, const ClothTopology& topology
     max_change = coarse_.project(p, config_.levels_interpolate, config_.simd);
   }
   max_change = std::max(max_change, projectStretch(h, p, topology));
-  max_change = std::max(max_change, projectBend(h, p, topology));
+  max_change = std::max(max_change, projectBend(h, p, topology, first_pass));
   if (config_.ordering == Ordering::kJacobi) applyJacobi(p, max_change);
   max_change = std::max(max_change, projectTethers(p, topology));
   // Contacts last in each pass so the positions a pass ends with are free of penetration.
@@ -766,13 +778,14 @@ void Solver::massSpringSubstep(double h, double s_end, Particles& p, const Cloth
 
 // The kinematic set is fixed during a step: the stretch constraints and hinges that join a
 // kinematic to a free particle are listed once, so the reactions cost nothing for the others.
-void Solver::startReactions(const Particles& p, const ClothTopology& topology) {
+void Solver::startReactions(const Particles& p, const ClothTopology& topology, bool list) {
   std::fill(reaction_.begin(), reaction_.end(), Vec3::Zero());
-  kinematic_stretch_.clear();
-  kinematic_bend_.clear();
   for (int i = 0; i < p.size(); ++i) {
     if (p.inverse_mass[i] == 0.0) start_velocity_[i] = p.velocity[i];
   }
+  if (!list) return;  // the kinematic set of the last step
+  kinematic_stretch_.clear();
+  kinematic_bend_.clear();
   if (config_.method == Method::kMassSpring) return;  // its springs report through force_
   const int stretch_count = static_cast<int>(topology.stretch.size());
   for (int c = 0; c < stretch_count; ++c) {
@@ -845,15 +858,23 @@ void Solver::step(double dt, Particles& p, const ClothTopology& topology, Collis
   startDegenerateCount();
   p.step_start = p.position;
   if (config_.ordering == Ordering::kJacobi) countJacobiConstraints(p, topology);
-  startReactions(p, topology);
-  // The kinematic set and h are fixed for the step: each link's 1 / (w_i + w_j + alpha~) once.
-  if (config_.method != Method::kMassSpring && fastStretch(topology)) {
-    stretch_links_.prepareStep(p.inverse_mass.data(), stretchAlpha(h));
+  // The kinematic set and h are fixed for the step: each link's 1 / (w_i + w_j + alpha~) and each
+  // hinge's gains once, and the constraints that join a kinematic to a free particle listed once.
+  // They change only with the inverse masses (a grasp, a pin), h or the configuration, so a step
+  // like the last one keeps the last one's.
+  const bool prepared = h == prepared_h_ && p.inverse_mass == prepared_inverse_mass_;
+  startReactions(p, topology, !prepared);
+  if (!prepared) {
+    if (config_.method != Method::kMassSpring && fastStretch(topology)) {
+      stretch_links_.prepareStep(p.inverse_mass.data(), stretchAlpha(h));
+    }
+    if (bend_compliance_ >= 0.0 && config_.method != Method::kMassSpring) {
+      prepareBendStep(p, topology, h);
+    }
+    prepared_h_ = h;
+    prepared_inverse_mass_ = p.inverse_mass;  // same size after the first: no allocation
   }
   coarse_.prepareStep(p);
-  if (bend_compliance_ >= 0.0 && config_.method != Method::kMassSpring) {
-    prepareBendStep(p, topology, h);
-  }
 
   // Find contacts at the step start; every substep enforces them (Jolt's "collide" phase).
   // Collisions::project searches again in a substep whose prediction left the swept boxes.
@@ -887,7 +908,8 @@ void Solver::step(double dt, Particles& p, const ClothTopology& topology, Collis
     } else {
       std::fill(stretch_lambda_.begin(), stretch_lambda_.end(), 0.0);
     }
-    std::fill(bend_lambda_.begin(), bend_lambda_.end(), Vec3::Zero());
+    // The flat hinges' first pass writes theirs (projectFlatHinges, lambda_from_zero).
+    if (!flatBend(topology)) std::fill(bend_lambda_.begin(), bend_lambda_.end(), Vec3::Zero());
     for (int pass = 0; pass < config_.iterations; ++pass) {
       ++stats_.iterations;
       const double max_change = projectPass(h, p, topology, collisions, pass == 0);

@@ -98,23 +98,21 @@ TEST(FlatHinges, OneProjectionFlattensAHingeAtTheEndOfTheArray) {
   const std::vector<double> start = {9.0, 9.0, 9.0, 0.0, 0.0, 0.0,  1.0, 0.0,
                                      0.0, 0.5, 1.0, 0.3, 0.5, -1.0, -0.2};
   const double inverse_mass[4] = {1.0, 2.0, 1.0, 0.5};
+  // What Solver::prepareBendStep fixes, at zero compliance (XPBD, k = 1): flat_hinges.h.
+  FlatHinge step;
   double w = 0.0;
-  std::vector<double> factor(4), largest(1, 0.0), inverse_denominator(1);
   for (int v = 0; v < 4; ++v) {
-    factor[v] = inverse_mass[v] * hinge.weight[v];
+    step.index[v] = hinge.index[v];
+    step.move[v] = inverse_mass[v] * hinge.weight[v] * hinge.scale;
     w += inverse_mass[v] * hinge.weight[v] * hinge.weight[v];
-    largest[0] = std::max(largest[0], std::abs(factor[v]));
+    step.largest_move = std::max(step.largest_move, std::abs(step.move[v]));
   }
-  inverse_denominator[0] = 1.0 / (w * hinge.scale * hinge.scale);
-  FlatHingeStep step;
-  step.inverse_denominator = inverse_denominator.data();
-  step.factor = factor.data();
-  step.largest_factor = largest.data();
+  w *= hinge.scale * hinge.scale;
+  for (int v = 0; v < 3; ++v) step.gain[v] = -hinge.scale * hinge.weight[v + 1] / w;
   std::vector<double> result[2];
   for (bool simd : {false, true}) {
     std::vector<double> x = start, lambda(3, 0.0);
-    const double moved =
-        projectFlatHinges(&hinge, 1, step, 1.0, 0.0, simd, x.data(), lambda.data());
+    const double moved = projectFlatHinges(&step, 1, false, true, simd, x.data(), lambda.data());
     EXPECT_GT(moved, 0.01);
     for (int d = 0; d < 3; ++d) {
       double b = 0.0;
@@ -122,6 +120,23 @@ TEST(FlatHinges, OneProjectionFlattensAHingeAtTheEndOfTheArray) {
       EXPECT_NEAR(b, 0.0, 1e-12) << "coordinate " << d << ", simd " << simd;
       EXPECT_EQ(x[d], 9.0);  // particle 0 is no corner
     }
+    // The largest move it reports is the largest corner's.
+    double largest = 0.0;
+    for (int i = 1; i <= 4; ++i) {
+      double sq = 0.0;
+      for (int d = 0; d < 3; ++d)
+        sq += (x[3 * i + d] - start[3 * i + d]) * (x[3 * i + d] - start[3 * i + d]);
+      largest = std::max(largest, std::sqrt(sq));
+    }
+    EXPECT_NEAR(moved, largest, 1e-12 * largest) << "simd " << simd;
+    // Untracked, and with the multipliers written instead of read (a substep's first pass, over
+    // a stale value): the same positions and multipliers, and no change reported.
+    std::vector<double> untracked = start, untracked_lambda(3, 7.0);
+    EXPECT_EQ(
+        projectFlatHinges(&step, 1, true, false, simd, untracked.data(), untracked_lambda.data()),
+        0.0);
+    EXPECT_EQ(untracked, x);
+    EXPECT_EQ(untracked_lambda, lambda);
     result[simd] = x;
   }
   EXPECT_EQ(result[0], result[1]);

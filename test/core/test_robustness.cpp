@@ -156,7 +156,10 @@ TEST(Robustness, ZeroAreaTriangles) {
   EXPECT_FALSE(makeBendConstraint(rest, 0, 1, 2, 3, bend));  // x2 on the edge: zero area
   EXPECT_FALSE(makeBendConstraint(rest, 0, 1, 3, 4, bend));  // x3 = x0
   EXPECT_FALSE(makeBendConstraint(rest, 0, 4, 1, 3, bend));  // zero-length edge
-  EXPECT_TRUE(makeBendConstraint(rest, 0, 1, 3, 3, bend));   // proper (if folded) triangles
+  EXPECT_TRUE(makeBendConstraint(rest, 1, 0, 3, 5, bend));   // proper (if thin) triangles
+  // One triangle listed twice (a mesh's duplicate): no hinge, so a hinge's corners are always
+  // four particles (flat_hinges.h).
+  EXPECT_FALSE(makeBendConstraint(rest, 0, 1, 3, 3, bend));
   // Relative, not absolute, thresholds: a 1e-6 m cloth still gets its hinges.
   const Vec3Array tiny = {Vec3(0, 0, 0), Vec3(1e-6, 0, 0), Vec3(0, -1e-6, 0), Vec3(1e-6, 1e-6, 0)};
   EXPECT_TRUE(makeBendConstraint(tiny, 0, 1, 2, 3, bend));
