@@ -117,7 +117,8 @@ class Solver {
   std::vector<int> jacobi_count_;  // Jacobi: stretch and bend constraints on each free particle
   Vec3Array force_;                // mass_spring: force accumulator
   Vec3Array predicted_;            // x~ = x_prev + h v~ of the current substep (free particles)
-  Vec3Array kinematic_velocity_;   // a kinematic particle's velocity kept across predict()
+  std::vector<int> kinematic_particles_;  // the step's kinematic particles (startReactions)
+  Vec3Array kinematic_velocity_;          // a kinematic particle's velocity kept across predict()
   // Reactions on kinematic particles: the stretch constraints and hinges with a kinematic and a
   // free particle (listed once per step), the sum of gradient times multiplier over the step
   // (kg m), the velocities at the step start, and the two forces of the last step.

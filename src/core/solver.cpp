@@ -92,6 +92,8 @@ void Solver::prepare(const Particles& particles, const ClothTopology& topology) 
   force_.assign(n, Vec3::Zero());
   predicted_.assign(n, Vec3::Zero());
   kinematic_velocity_.assign(n, Vec3::Zero());
+  kinematic_particles_.clear();
+  kinematic_particles_.reserve(n);
   kinematic_stretch_.clear();
   kinematic_stretch_.reserve(topology.stretch.size());
   kinematic_bend_.clear();
@@ -274,16 +276,15 @@ void Solver::predict(double h, double s_end, Particles& p) {
   auto job = [&](int t) {
     const int begin = WorkerPool::rangeBegin(n, t, threads);
     const int end = WorkerPool::rangeBegin(n, t + 1, threads);
-    const double* w = p.inverse_mass.data();
-    for (int i = begin; i < end; ++i) {
-      if (w[i] == 0.0) kinematic_velocity_[i] = p.velocity[i];
+    for (int i : kinematic_particles_) {
+      if (i >= begin && i < end) kinematic_velocity_[i] = p.velocity[i];
     }
     predictFree(
         {begin, end, keep, h, dv[0], dv[1], dv[2], p.position.front().data(),
          p.velocity.front().data(), p.substep_start.front().data(), predicted_.front().data()},
         avx2);
-    for (int i = begin; i < end; ++i) {
-      if (w[i] != 0.0) continue;
+    for (int i : kinematic_particles_) {
+      if (i < begin || i >= end) continue;
       p.velocity[i] = kinematic_velocity_[i];
       p.position[i] = (1.0 - s_end) * p.kinematic_from[i] + s_end * p.kinematic_to[i];
     }
@@ -708,10 +709,8 @@ void Solver::updateVelocities(double h, Particles& p) {
     updateFree(3 * begin, 3 * end, inv_h, p.position.front().data(), predicted_.front().data(),
                p.velocity.front().data(), avx2);
     // A kinematic particle's velocity is the one it moved with: (x - x_start) / h.
-    for (int i = begin; i < end; ++i) {
-      if (p.inverse_mass[i] == 0.0) {
-        p.velocity[i] = (p.position[i] - p.substep_start[i]) * inv_h;
-      }
+    for (int i : kinematic_particles_) {
+      if (i >= begin && i < end) p.velocity[i] = (p.position[i] - p.substep_start[i]) * inv_h;
     }
   };
   pool_.run(job);
@@ -784,6 +783,10 @@ void Solver::startReactions(const Particles& p, const ClothTopology& topology, b
     if (p.inverse_mass[i] == 0.0) start_velocity_[i] = p.velocity[i];
   }
   if (!list) return;  // the kinematic set of the last step
+  kinematic_particles_.clear();
+  for (int i = 0; i < p.size(); ++i) {
+    if (p.inverse_mass[i] == 0.0) kinematic_particles_.push_back(i);
+  }
   kinematic_stretch_.clear();
   kinematic_bend_.clear();
   if (config_.method == Method::kMassSpring) return;  // its springs report through force_
