@@ -149,7 +149,8 @@ class Collisions {
   // particle its reference path: the search's candidates then no longer cover every contact.
   bool leftMotionBounds(const Particles& particles, bool paths) const;
   void preStabilizeObstacles(Particles& particles, double max_shift);
-  double projectObstaclesAndBounds(Particles& particles);
+  // first_pass: the substep's first pass, in which no contact has pushed yet.
+  double projectObstaclesAndBounds(Particles& particles, bool first_pass);
   // The obstacles' contacts of free particle i (first_pass: the substep's first pass), and the
   // bounds' clamp of a free particle's position.
   double projectObstaclesOn(Particles& particles, int i, bool first_pass);
@@ -188,10 +189,9 @@ class Collisions {
   // Step and substep.
   double dt_ = 0.0;
   double substep_begin_ = 0.0;
-  int step_ = 0;                  // stamp of the current step (ContactState::window)
-  int substep_ = 0;               // stamp of the current substep (ContactState::substep)
-  int checked_substep_ = -1;      // substep whose particles were checked against their swept boxes
-  int environment_substep_ = -1;  // substep of the last obstacle and bounds pass
+  int step_ = 0;              // stamp of the current step (ContactState::window)
+  int substep_ = 0;           // stamp of the current substep (ContactState::substep)
+  int checked_substep_ = -1;  // substep whose particles were checked against their swept boxes
 
   // Broad phase of the step.
   Vec3Array box_lo_;  // swept box of each particle over the (rest of the) step

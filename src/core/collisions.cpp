@@ -134,7 +134,6 @@ void Collisions::prepare(const Particles& particles, const ClothTopology& topolo
   self_collision_pairs_.reserve(particles, topology);
   substep_ = step_ = 0;
   checked_substep_ = -1;
-  environment_substep_ = -1;
   dt_ = 0.0;
   stats_ = CollisionStats();
   path_start_.assign(n, Vec3::Zero());
@@ -231,7 +230,6 @@ void Collisions::beginStep(Particles& particles, const ClothTopology& topology, 
   ++step_;
   stats_.broad_phase_runs = 0;
   checked_substep_ = -1;
-  environment_substep_ = -1;
   std::fill(kinematic_reaction_.begin(), kinematic_reaction_.end(), Vec3::Zero());
   for (std::size_t k = 0; k < obstacles_.size(); ++k) {
     frame_begin_[k] = frame_end_[k] = frameFromPose(obstacles_[k].pose);
@@ -263,7 +261,6 @@ void Collisions::setSubstepFraction(double s_begin, double s_end) {
   if (substep_ == INT_MAX) {
     // Stamps wrap after 2^31 substeps (weeks of running): forget every state, none is current.
     substep_ = step_ = 0;
-    environment_substep_ = -1;
     for (ContactState& state : obstacle_contacts_) state.forget();
   }
   ++substep_;
@@ -283,7 +280,8 @@ void Collisions::setSubstepFraction(double s_begin, double s_end) {
 double Collisions::project(Particles& particles, const ClothTopology& topology) {
   const bool particle_contacts = particleContactsActive(particles);
   const bool self_collision = selfCollisionActive(topology);
-  if (checked_substep_ != substep_) {
+  const bool first_pass = checked_substep_ != substep_;
+  if (first_pass) {
     // First pass of a substep: the prediction is done. A particle outside its swept box may meet
     // contacts the broad phase did not list: find them again for the rest of the step.
     checked_substep_ = substep_;
@@ -309,7 +307,7 @@ double Collisions::project(Particles& particles, const ClothTopology& topology) 
         std::max(max_change, self_collision_pairs_.project(particles, thickness_, substep_,
                                                            friction_, kinematic_reaction_));
   }
-  max_change = std::max(max_change, projectObstaclesAndBounds(particles));
+  max_change = std::max(max_change, projectObstaclesAndBounds(particles, first_pass));
   return max_change;
 }
 
@@ -346,13 +344,10 @@ void Collisions::preStabilizeObstacles(Particles& p, double max_shift) {
 // Obstacles, then the bounds. Each touches only the particle it projects (and the obstacles its
 // own contact slots), so with threads (solver.threads) each takes a consecutive range of
 // particles: the same result for every count.
-double Collisions::projectObstaclesAndBounds(Particles& p) {
+double Collisions::projectObstaclesAndBounds(Particles& p, bool first_pass) {
   if (shapes_.empty() && !bounds_.enabled) return 0.0;
   const int threads =
       pool_ != nullptr && p.size() >= 2 * kParticlesPerThread ? pool_->threads() : 1;
-  // The first pass of a substep: no contact has pushed in it yet.
-  const bool first_pass = environment_substep_ != substep_;
-  environment_substep_ = substep_;
   auto range = [&](int begin, int end) {
     double max_change = 0.0;
     for (int i = begin; i < end; ++i) {
@@ -388,19 +383,17 @@ double Collisions::projectObstaclesOn(Particles& p, int i, bool first_pass) {
     // Cheap cull: a particle whose path of this substep (the segment from its start, in the box
     // of its ends grown by its radius) stays out of the obstacle's bounds cannot touch it, unless
     // it was pushed out earlier in this substep (never so in its first pass).
-    if (boxesApart(x.cwiseMin(start).array() - r, x.cwiseMax(start).array() + r, obstacle_lo_[k],
-                   obstacle_hi_[k])) {
-      if (first_pass) continue;
-      const ContactState& state = obstacle_contacts_[slot];
-      if (!(state.substep == substep_ && state.depth > 0.0)) continue;
-    }
+    const bool apart = boxesApart(x.cwiseMin(start).array() - r, x.cwiseMax(start).array() + r,
+                                  obstacle_lo_[k], obstacle_hi_[k]);
+    if (apart && first_pass) continue;  // (the contact's state not even read)
     ContactState& state = obstacle_contacts_[slot];
     const bool pushed = state.substep == substep_ && state.depth > 0.0;
+    if (apart && !pushed) continue;
     const Shape& shape = shapes_[k];
     const Frame& begin = frame_begin_[k];
     const Frame& end = frame_end_[k];
-    const Vec3 b = end.toLocal(x);  // where the particle is, relative to the shape now
-    const Vec3 a = begin.toLocal(p.substep_start[i]);  // ... and where it was
+    const Vec3 b = end.toLocal(x);        // where the particle is, relative to the shape now
+    const Vec3 a = begin.toLocal(start);  // ... and where it was
     const bool mesh = shape.type == ShapeType::kMesh;
     if (mesh && !pushed) {
       // A mesh query costs a tree search; the last one bounds this one for free. The distance
@@ -514,7 +507,6 @@ void Collisions::setMeshContacts(const std::vector<MeshContactCache>& caches) {
 
 void Collisions::findCandidatesNow(const Particles& particles, const ClothTopology& topology) {
   checked_substep_ = -1;
-  environment_substep_ = -1;
   computeSweptBoxes(particles, 0.0, 0.0, 0.0);
   findCandidates(particles, topology, true);
 }
