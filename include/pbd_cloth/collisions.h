@@ -54,6 +54,7 @@
 #include "pbd_cloth/self_collision.h"
 #include "pbd_cloth/shapes.h"
 #include "pbd_cloth/sim_state.h"
+#include "pbd_cloth/worker_pool.h"
 
 namespace pbd_cloth {
 
@@ -133,8 +134,8 @@ class Collisions {
   // have moved them by, times their mass. The solver turns it into their constraint force.
   // (Obstacles and bounds leave kinematic particles alone.)
   const Vec3Array& kinematicReaction() const { return kinematic_reaction_; }
-  // Threads for the self-collision broad phase (the solver's, solver.threads; nullptr: this
-  // thread alone). The pairs found are the same for every count.
+  // Threads for the obstacle and bounds projection (the solver's, solver.threads; nullptr: this
+  // thread alone), in ranges of particles: the same result for every count.
   void setWorkerPool(WorkerPool* pool) { pool_ = pool; }
   // Largest speed at which pre-existing overlaps are separated (m/s), 1 by default.
   void setMaxSeparationSpeed(double speed) { max_separation_speed_ = speed; }

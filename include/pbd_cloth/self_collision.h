@@ -28,8 +28,7 @@
 
 #include "pbd_cloth/contact.h"
 #include "pbd_cloth/particles.h"
-#include "pbd_cloth/spatial_hash.h"
-#include "pbd_cloth/worker_pool.h"
+#include "pbd_cloth/triangle_tree.h"
 
 namespace pbd_cloth {
 
@@ -44,6 +43,10 @@ struct MotionBounds {
   const Vec3Array& path_move;
   double path_slack;
 };
+
+// Distance from q to the triangle (p1, p2, p3), and between the segments p1p2 and q1q2.
+double pointTriangleDistance(const Vec3& q, const Vec3& p1, const Vec3& p2, const Vec3& p3);
+double segmentSegmentDistance(const Vec3& p1, const Vec3& p2, const Vec3& q1, const Vec3& q2);
 
 struct SelfContactPair {
   // Vertex-triangle: the vertex, then the triangle's corners. Edge-edge: one edge, then the other.
@@ -61,27 +64,25 @@ class SelfCollision {
 
   // Broad phase, once per step: each cloth vertex whose swept box comes within h of a triangle's
   // swept box (the triangle's own vertices excepted) and that the reference paths do not keep
-  // farther than h from it (below) and, with `edge_pairs`, each pair
-  // of edges of cells that are not neighbours whose swept boxes come within h. The sides come
-  // from the step-start positions. A repeated broad phase within the step (a particle left its
-  // box) passes edge_pairs = false: it renews the vertex-triangle pairs, the primary contacts, and
-  // keeps the edge-edge pairs of the step start, whose search costs several times more; a
-  // vertex-triangle pair found again keeps its side and contact state.
-  // With a pool of more than one thread (solver.threads): at the step start the two searches run
-  // side by side on two threads, each with its own hash; a repeated search splits the vertices'
-  // queries into ranges, each thread listing its range's pairs, joined in range order. Either
-  // way the same pairs in the same order as one thread finds them.
+  // farther than h from it (below) and, with `edge_pairs`, each pair of edges of cells that are
+  // not neighbours whose swept boxes come within h. The sides come from the step-start positions.
+  // A repeated broad phase within the step (a particle left its box) passes edge_pairs = false: it
+  // renews the vertex-triangle pairs, the primary contacts, and keeps the edge-edge pairs of the
+  // step start; a vertex-triangle pair found again keeps its side and contact state.
+  // The candidates come from the triangle tree (triangle_tree.h): pairs of leaves whose boxes
+  // overlap, flat patches left out. Each vertex and each edge is owned by one of its triangles, so
+  // a leaf pair lists the owned vertices of either side's triangles against the other's
+  // triangles, and the owned edges of both against each other: every candidate once.
+  // The list is the same for every solver.threads (the search runs on one thread).
   // The paths' cull: points of the triangle are convex combinations of its corners, so while each
   // particle i stays within r_i of its path x_i + s u_i (s in [0, 1] the same for all), the
   // distance between the vertex v and the triangle (a, b, c) changes from its value d at the
   // search by at most r_v + max_k r_k + max_k |u_v - u_k| (k = a, b, c). A pair with
   //   d > h + r_v + max_k r_k + max_k |u_v - u_k|
   // cannot come within h before a particle leaves its path, which Collisions checks at every
-  // substep (and then searches again): it is left out. It drops the neighbours of a flat cloth
-  // moving as a whole, which the boxes alone list.
+  // substep (and then searches again): it is left out.
   void findPairs(const Particles& particles, const ClothTopology& topology,
-                 const MotionBounds& bounds, double thickness, bool edge_pairs,
-                 WorkerPool* pool = nullptr);
+                 const MotionBounds& bounds, double thickness, bool edge_pairs);
 
   // Pre-stabilisation: pushes contacts closer than h by more than the slop (a fraction of h) apart
   // by at most max_shift, on the positions before the step's first prediction (no velocity).
@@ -100,7 +101,9 @@ class SelfCollision {
   // triangle; edges' closest points interior, edges within a few thicknesses) (m).
   double maxPenetration(const Particles& particles, double thickness) const;
   int pairCount() const { return static_cast<int>(pairs_.size()); }
-  // Between steps: the candidate lists (and the threads' lists of a split search) go back to
+  // The candidates: edge-edge pairs first, then vertex-triangle pairs by vertex.
+  const std::vector<SelfContactPair>& pairs() const { return pairs_; }
+  // Between steps: the candidate lists go back to
   // their reserve once an extreme step that outgrew it is over (a fast fold can need many times the
   // usual candidates, and a node that kept that peak for good would grow with every new extreme).
   // Returns the bytes released.
@@ -109,25 +112,21 @@ class SelfCollision {
   int edgeEdgePairCount() const { return edge_pair_count_; }
 
  private:
-  // Each appends its pairs to `found`; a pool of more than one thread splits the search into
-  // ranges (threads' lists joined in range order).
-  void findVertexTrianglePairs(const Particles& particles, const ClothTopology& topology,
-                               const MotionBounds& bounds, double thickness, WorkerPool* pool,
-                               std::vector<SelfContactPair>& found);
+  // The candidates of the leaves a and b of the tree (a == b: of the leaf with itself).
+  void findLeafPairs(int a, int b, const Particles& particles, const ClothTopology& topology,
+                     const MotionBounds& bounds, double thickness, bool edge_pairs);
+  void addVertexTriangle(int v, int t, const Particles& particles, const ClothTopology& topology,
+                         const MotionBounds& bounds, double thickness);
+  void addEdgeEdge(int e, int f, const Particles& particles, const ClothTopology& topology,
+                   const MotionBounds& bounds, double thickness);
+  bool neighbours(int u, int v, const ClothTopology& topology) const;
   void carryVertexTriangleStates();
-  void findEdgeEdgePairs(const Particles& particles, const ClothTopology& topology,
-                         const MotionBounds& bounds, double thickness, WorkerPool* pool,
-                         std::vector<SelfContactPair>& found);
-  // Threads' lists, appended to `found` in thread order and emptied (their capacity is kept
-  // between steps, up to the reserve: releaseExcessCapacity).
-  void sizeThreadLists(int threads);
-  void joinThreadLists(int threads, std::vector<SelfContactPair>& found);
 
   std::vector<std::array<int, 2>> edges_;
-  std::vector<std::array<int, 4>> edge_grid_;  // grid cloths: row, column of each edge's ends
-  SpatialHash triangle_hash_;
-  SpatialHash edge_hash_;
-  Vec3Array grown_lo_;  // vertex boxes grown by h / 2
+  TriangleTree tree_;
+  std::vector<std::array<int, 3>> owned_vertices_;  // per triangle, -1 where none
+  std::vector<std::array<int, 3>> owned_edges_;     // per triangle: indices into edges_, -1
+  Vec3Array grown_lo_;                              // vertex boxes grown by h / 2
   Vec3Array grown_hi_;
   Vec3Array triangle_lo_;  // triangle boxes: the union of their vertices' grown boxes
   Vec3Array triangle_hi_;
@@ -137,8 +136,7 @@ class SelfCollision {
   std::vector<SelfContactPair> pairs_;  // edge-edge pairs first, then vertex-triangle pairs
   int edge_pair_count_ = 0;
   std::vector<SelfContactPair> previous_;  // vertex-triangle pairs before a search within the step
-  std::vector<std::vector<SelfContactPair>> thread_pairs_;
-  std::vector<SelfContactPair> vertex_found_;  // step start with threads: found beside the edges
+  std::vector<SelfContactPair> vertex_found_;  // this search's vertex-triangle pairs, then sorted
 };
 
 }  // namespace pbd_cloth

@@ -37,29 +37,6 @@ class SpatialHash {
   template <class Visit>
   void forEachOverlapping(const Vec3& lo, const Vec3& hi, Visit&& visit) const;
 
-  // Calls visit(a, b) exactly once for every pair of filed items whose boxes overlap (a self-join
-  // cell by cell: cheaper than one query per item when the items are the queries too).
-  template <class Visit>
-  void forEachOverlappingPair(Visit&& visit) const {
-    forEachOverlappingPairIn(0, bucketCount(), true, visit);
-  }
-  // The same for the pairs of buckets [first_bucket, end_bucket) only, and with `overflow` those
-  // of the boxes too long to be filed (reported first). Ranges that cover the buckets once, the
-  // first with `overflow`, report every pair once, in the order of the whole self-join when run
-  // in order (threads each take a range, solver.threads).
-  template <class Visit>
-  void forEachOverlappingPairIn(std::size_t first_bucket, std::size_t end_bucket, bool overflow,
-                                Visit&& visit) const {
-    forEachOverlappingPairIn(
-        first_bucket, end_bucket, overflow, [](int, int) { return false; }, visit);
-  }
-  // The same, leaving out the pairs for which skip(a, b) is true before their boxes are compared
-  // (a test on the items alone, cheaper than reading two boxes: the self-collision's neighbours).
-  template <class Skip, class Visit>
-  void forEachOverlappingPairIn(std::size_t first_bucket, std::size_t end_bucket, bool overflow,
-                                Skip&& skip, Visit&& visit) const;
-  std::size_t bucketCount() const { return bucket_start_.empty() ? 0 : bucket_start_.size() - 1; }
-
   static constexpr int kMaxCellsPerItem = 64;
 
  private:
@@ -129,39 +106,6 @@ void SpatialHash::forEachOverlapping(const Vec3& lo, const Vec3& hi, Visit&& vis
           if (a.cwiseMax(lo_cell_[k]) != cell) continue;  // reported from another cell
           visit(k);
         }
-      }
-    }
-  }
-}
-
-template <class Skip, class Visit>
-void SpatialHash::forEachOverlappingPairIn(std::size_t first_bucket, std::size_t end_bucket,
-                                           bool overflow, Skip&& skip, Visit&& visit) const {
-  // Boxes too long to be filed meet every other box through a query of their own.
-  if (overflow) {
-    for (int a : overflow_) {
-      forEachOverlapping(lo_[a], hi_[a], [&](int b) {
-        if (b != a && !(cellsSpanned(lo_cell_[b], cellOf(hi_[b])) > kMaxCellsPerItem && b < a) &&
-            !skip(a, b)) {
-          visit(a, b);
-        }
-      });
-    }
-  }
-  const std::size_t buckets = std::min(end_bucket, bucketCount());
-  for (std::size_t bucket = first_bucket; bucket < buckets; ++bucket) {
-    const int end = bucket_start_[bucket + 1];
-    for (int s = bucket_start_[bucket]; s < end; ++s) {
-      const Entry& first = entries_[s];
-      const int a = first.item;
-      for (int t = s + 1; t < end; ++t) {
-        const Entry& second = entries_[t];
-        if (second.cell != first.cell) continue;  // another cell in the same bucket
-        const int b = second.item;
-        if (skip(a, b) || !overlap(lo_[a], hi_[a], lo_[b], hi_[b])) continue;
-        // Reported from the cell holding the lower corner of the intersection only.
-        if (lo_cell_[a].cwiseMax(lo_cell_[b]) != first.cell) continue;
-        visit(a, b);
       }
     }
   }

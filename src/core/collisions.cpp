@@ -196,7 +196,7 @@ void Collisions::findCandidates(const Particles& particles, const ClothTopology&
   }
   if (selfCollisionActive(topology)) {
     const MotionBounds bounds{box_lo_, box_hi_, path_start_, path_move_, kBoxSlack};
-    self_collision_pairs_.findPairs(particles, topology, bounds, thickness_, step_start, pool_);
+    self_collision_pairs_.findPairs(particles, topology, bounds, thickness_, step_start);
   }
   stats_.particle_pairs = particle_contacts_.pairCount();
   const bool self_collision = selfCollisionActive(topology);

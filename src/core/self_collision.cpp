@@ -82,6 +82,42 @@ bool edgeEdge(const Vec3& p1, const Vec3& p2, const Vec3& q1, const Vec3& q2, Co
   return true;
 }
 
+bool geometry(const SelfContactPair& pair, const Vec3Array& x, ContactGeometry& g) {
+  const int* k = pair.index;
+  return pair.edge_edge ? edgeEdge(x[k[0]], x[k[1]], x[k[2]], x[k[3]], g)
+                        : vertexTriangle(x[k[0]], x[k[1]], x[k[2]], x[k[3]], g);
+}
+
+// Generalised inverse mass sum_k c_k^2 w_k of the four-point contact.
+double inverseMass(const SelfContactPair& pair, const ContactGeometry& g, const Particles& p) {
+  double w = 0.0;
+  for (int k = 0; k < 4; ++k) {
+    w += g.coefficient[k] * g.coefficient[k] * p.inverse_mass[pair.index[k]];
+  }
+  return w;
+}
+
+// Moves the four points so that sum_k c_k x_k changes by `change` (a vector): x_k += w_k c_k
+// change / w. With `reaction`, a kinematic point, which stays, gets c_k change / w there (its
+// gradient times the multiplier).
+void distribute(const SelfContactPair& pair, const ContactGeometry& g, double w, const Vec3& change,
+                Particles& p, Vec3Array* reaction = nullptr) {
+  for (int k = 0; k < 4; ++k) {
+    const int i = pair.index[k];
+    p.position[i] += (p.inverse_mass[i] * g.coefficient[k] / w) * change;
+    if (reaction != nullptr && p.inverse_mass[i] == 0.0) {
+      (*reaction)[i] += (g.coefficient[k] / w) * change;
+    }
+  }
+}
+
+bool allKinematic(const Particles& p, int a, int b, int c, int d) {
+  return p.inverse_mass[a] == 0.0 && p.inverse_mass[b] == 0.0 && p.inverse_mass[c] == 0.0 &&
+         p.inverse_mass[d] == 0.0;
+}
+
+}  // namespace
+
 // Distance from q to the closest point of the triangle (p1, p2, p3) (Ericson 2005, sec. 5.1.5:
 // the Voronoi region of q among the corners, edges and face).
 double pointTriangleDistance(const Vec3& q, const Vec3& p1, const Vec3& p2, const Vec3& p3) {
@@ -136,42 +172,6 @@ double segmentSegmentDistance(const Vec3& p1, const Vec3& p2, const Vec3& q1, co
   return (p1 + s * d1 - (q1 + t * d2)).norm();
 }
 
-bool geometry(const SelfContactPair& pair, const Vec3Array& x, ContactGeometry& g) {
-  const int* k = pair.index;
-  return pair.edge_edge ? edgeEdge(x[k[0]], x[k[1]], x[k[2]], x[k[3]], g)
-                        : vertexTriangle(x[k[0]], x[k[1]], x[k[2]], x[k[3]], g);
-}
-
-// Generalised inverse mass sum_k c_k^2 w_k of the four-point contact.
-double inverseMass(const SelfContactPair& pair, const ContactGeometry& g, const Particles& p) {
-  double w = 0.0;
-  for (int k = 0; k < 4; ++k) {
-    w += g.coefficient[k] * g.coefficient[k] * p.inverse_mass[pair.index[k]];
-  }
-  return w;
-}
-
-// Moves the four points so that sum_k c_k x_k changes by `change` (a vector): x_k += w_k c_k
-// change / w. With `reaction`, a kinematic point, which stays, gets c_k change / w there (its
-// gradient times the multiplier).
-void distribute(const SelfContactPair& pair, const ContactGeometry& g, double w, const Vec3& change,
-                Particles& p, Vec3Array* reaction = nullptr) {
-  for (int k = 0; k < 4; ++k) {
-    const int i = pair.index[k];
-    p.position[i] += (p.inverse_mass[i] * g.coefficient[k] / w) * change;
-    if (reaction != nullptr && p.inverse_mass[i] == 0.0) {
-      (*reaction)[i] += (g.coefficient[k] / w) * change;
-    }
-  }
-}
-
-bool allKinematic(const Particles& p, int a, int b, int c, int d) {
-  return p.inverse_mass[a] == 0.0 && p.inverse_mass[b] == 0.0 && p.inverse_mass[c] == 0.0 &&
-         p.inverse_mass[d] == 0.0;
-}
-
-}  // namespace
-
 void SelfCollision::reserve(const Particles& particles, const ClothTopology& topology) {
   const int triangles = topology.triangleCount();
   edges_.clear();
@@ -185,14 +185,31 @@ void SelfCollision::reserve(const Particles& particles, const ClothTopology& top
   std::sort(edges_.begin(), edges_.end());
   edges_.erase(std::unique(edges_.begin(), edges_.end()), edges_.end());
   const int edges = static_cast<int>(edges_.size());
-  edge_grid_.clear();
-  if (!topology.from_mesh && topology.cols > 0) {
-    const int cols = topology.cols;
-    for (const auto& [a, b] : edges_)
-      edge_grid_.push_back({a / cols, a % cols, b / cols, b % cols});
+
+  tree_.build(topology.triangles, particles.position);
+  // Owners: each vertex and each edge to the first triangle (in the tree's leaf order) that has
+  // it, so a leaf pair lists it once (findPairs).
+  owned_vertices_.assign(triangles, {-1, -1, -1});
+  owned_edges_.assign(triangles, {-1, -1, -1});
+  std::vector<char> vertex_owned(particles.cloth_count, 0), edge_owned(edges, 0);
+  for (int slot = 0; slot < triangles; ++slot) {
+    const int t = tree_.triangle(slot);
+    for (int e = 0; e < 3; ++e) {
+      const int a = static_cast<int>(topology.triangles[3 * t + e]);
+      const int b = static_cast<int>(topology.triangles[3 * t + (e + 1) % 3]);
+      if (a < particles.cloth_count && !vertex_owned[a]) {
+        vertex_owned[a] = 1;
+        owned_vertices_[t][e] = a;
+      }
+      const std::array<int, 2> edge{std::min(a, b), std::max(a, b)};
+      const int index =
+          static_cast<int>(std::lower_bound(edges_.begin(), edges_.end(), edge) - edges_.begin());
+      if (!edge_owned[index]) {
+        edge_owned[index] = 1;
+        owned_edges_[t][e] = index;
+      }
+    }
   }
-  triangle_hash_.reserve(triangles);
-  edge_hash_.reserve(edges);
   grown_lo_.reserve(particles.cloth_count);
   grown_hi_.reserve(particles.cloth_count);
   triangle_lo_.reserve(triangles);
@@ -205,21 +222,17 @@ void SelfCollision::reserve(const Particles& particles, const ClothTopology& top
   reserved_pairs_ = 8 * static_cast<std::size_t>(triangles + edges);
   pairs_.reserve(reserved_pairs_);
   previous_.reserve(reserved_pairs_);
+  vertex_found_.reserve(reserved_pairs_);
 }
 
 std::size_t SelfCollision::releaseExcessCapacity() {
-  // The threads' lists are scratch, empty between searches: each keeps at most the same reserve.
-  std::size_t released = shrinkToReserve(vertex_found_, reserved_pairs_);
-  for (std::vector<SelfContactPair>& list : thread_pairs_) {
-    released += shrinkToReserve(list, reserved_pairs_);
-  }
-  return released + shrinkToReserve(pairs_, reserved_pairs_) +
-         shrinkToReserve(previous_, reserved_pairs_);
+  // The search's vertex list is scratch, empty between searches: it keeps at most the reserve.
+  return shrinkToReserve(vertex_found_, reserved_pairs_) +
+         shrinkToReserve(pairs_, reserved_pairs_) + shrinkToReserve(previous_, reserved_pairs_);
 }
 
 void SelfCollision::findPairs(const Particles& p, const ClothTopology& topology,
-                              const MotionBounds& bounds, double thickness, bool edge_pairs,
-                              WorkerPool* pool) {
+                              const MotionBounds& bounds, double thickness, bool edge_pairs) {
   const Vec3Array& lo = bounds.lo;
   const Vec3Array& hi = bounds.hi;
   // Edge-edge pairs first, vertex-triangle pairs after them: a repeated broad phase within the
@@ -227,7 +240,9 @@ void SelfCollision::findPairs(const Particles& p, const ClothTopology& topology,
   if (!edge_pairs) previous_.assign(pairs_.begin() + edge_pair_count_, pairs_.end());
   pairs_.resize(edge_pairs ? 0 : edge_pair_count_);
   if (edge_pairs) edge_pair_count_ = 0;
-  if (topology.triangleCount() == 0) return;
+  vertex_found_.clear();
+  const int triangles = topology.triangleCount();
+  if (triangles == 0) return;
   // Vertex boxes grown by h / 2: two boxes built from them overlap when within h of each other.
   const double half = 0.5 * thickness;
   const int vertices = p.cloth_count;
@@ -237,26 +252,37 @@ void SelfCollision::findPairs(const Particles& p, const ClothTopology& topology,
     grown_lo_[v] = lo[v].array() - half;
     grown_hi_[v] = hi[v].array() + half;
   }
-  const int threads = pool != nullptr ? pool->threads() : 1;
-  if (edge_pairs && threads >= 2) {
-    // The two searches side by side, each on one thread with its own hash: edge-edge pairs
-    // straight into the list, vertex-triangle pairs into their own, appended after them.
-    vertex_found_.clear();
-    auto job = [&](int t) {
-      if (t == 0) findVertexTrianglePairs(p, topology, bounds, thickness, nullptr, vertex_found_);
-      if (t == 1) findEdgeEdgePairs(p, topology, bounds, thickness, nullptr, pairs_);
-    };
-    pool->run(job);
-    edge_pair_count_ = static_cast<int>(pairs_.size());
-    pairs_.insert(pairs_.end(), vertex_found_.begin(), vertex_found_.end());
-    vertex_found_.clear();
-    return;
+  const auto& tri = topology.triangles;
+  triangle_lo_.resize(triangles);
+  triangle_hi_.resize(triangles);
+  for (int t = 0; t < triangles; ++t) {
+    const unsigned a = tri[3 * t], b = tri[3 * t + 1], c = tri[3 * t + 2];
+    triangle_lo_[t] = grown_lo_[a].cwiseMin(grown_lo_[b]).cwiseMin(grown_lo_[c]);
+    triangle_hi_[t] = grown_hi_[a].cwiseMax(grown_hi_[b]).cwiseMax(grown_hi_[c]);
   }
   if (edge_pairs) {
-    findEdgeEdgePairs(p, topology, bounds, thickness, pool, pairs_);
-    edge_pair_count_ = static_cast<int>(pairs_.size());
+    const int edges = static_cast<int>(edges_.size());
+    edge_lo_.resize(edges);
+    edge_hi_.resize(edges);
+    for (int e = 0; e < edges; ++e) {
+      const int a = edges_[e][0], b = edges_[e][1];
+      edge_lo_[e] = grown_lo_[a].cwiseMin(grown_lo_[b]);
+      edge_hi_[e] = grown_hi_[a].cwiseMax(grown_hi_[b]);
+    }
   }
-  findVertexTrianglePairs(p, topology, bounds, thickness, pool, pairs_);
+  tree_.refit(tri, triangle_lo_, triangle_hi_, bounds.path_start, bounds.path_move);
+  tree_.forEachLeafPair(tree_.cosFlat(thickness), [&](int a, int b) {
+    findLeafPairs(a, b, p, topology, bounds, thickness, edge_pairs);
+  });
+  if (edge_pairs) edge_pair_count_ = static_cast<int>(pairs_.size());
+  // By vertex, then triangle: the order carryVertexTriangleStates bisects, and one that does not
+  // depend on the tree's traversal.
+  std::sort(vertex_found_.begin(), vertex_found_.end(),
+            [](const SelfContactPair& x, const SelfContactPair& y) {
+              return std::lexicographical_compare(x.index, x.index + 4, y.index, y.index + 4);
+            });
+  pairs_.insert(pairs_.end(), vertex_found_.begin(), vertex_found_.end());
+  vertex_found_.clear();
   if (!edge_pairs) carryVertexTriangleStates();
 }
 
@@ -278,174 +304,124 @@ void SelfCollision::carryVertexTriangleStates() {
   }
 }
 
-void SelfCollision::sizeThreadLists(int threads) {
-  if (static_cast<int>(thread_pairs_.size()) < threads) thread_pairs_.resize(threads);
-  for (int t = 0; t < threads; ++t) thread_pairs_[t].clear();
-}
-
-void SelfCollision::joinThreadLists(int threads, std::vector<SelfContactPair>& found) {
-  for (int t = 0; t < threads; ++t) {
-    found.insert(found.end(), thread_pairs_[t].begin(), thread_pairs_[t].end());
-    thread_pairs_[t].clear();
+void SelfCollision::findLeafPairs(int a, int b, const Particles& p, const ClothTopology& topology,
+                                  const MotionBounds& bounds, double thickness, bool edge_pairs) {
+  const TriangleTree::Node& first = tree_.node(a);
+  const TriangleTree::Node& second = tree_.node(b);
+  const int first_end = first.first + first.count, second_end = second.first + second.count;
+  for (int s = first.first; s < first_end; ++s) {
+    const int t = tree_.triangle(s);
+    // A leaf with itself: each pair of its triangles once (a triangle with itself has none: its
+    // vertices and edges all touch it).
+    for (int r = a == b ? s + 1 : second.first; r < second_end; ++r) {
+      const int u = tree_.triangle(r);
+      if (!((triangle_lo_[t].array() <= triangle_hi_[u].array()).all() &&
+            (triangle_lo_[u].array() <= triangle_hi_[t].array()).all())) {
+        continue;
+      }
+      for (int v : owned_vertices_[t]) {
+        if (v >= 0) addVertexTriangle(v, u, p, topology, bounds, thickness);
+      }
+      for (int v : owned_vertices_[u]) {
+        if (v >= 0) addVertexTriangle(v, t, p, topology, bounds, thickness);
+      }
+      if (!edge_pairs) continue;
+      for (int e : owned_edges_[t]) {
+        if (e < 0) continue;
+        for (int f : owned_edges_[u]) {
+          if (f >= 0) addEdgeEdge(std::min(e, f), std::max(e, f), p, topology, bounds, thickness);
+        }
+      }
+    }
   }
 }
 
-// Triangles are hashed (each in the cells its box covers) and every vertex queries its small
-// box: fewer, shorter queries than the other way round. The cell is the mean triangle box.
-void SelfCollision::findVertexTrianglePairs(const Particles& p, const ClothTopology& topology,
-                                            const MotionBounds& bounds, double thickness,
-                                            WorkerPool* pool, std::vector<SelfContactPair>& found) {
+void SelfCollision::addVertexTriangle(int v, int t, const Particles& p,
+                                      const ClothTopology& topology, const MotionBounds& bounds,
+                                      double thickness) {
+  if (!((grown_lo_[v].array() <= triangle_hi_[t].array()).all() &&
+        (triangle_lo_[t].array() <= grown_hi_[v].array()).all())) {
+    return;
+  }
+  const auto& tri = topology.triangles;
+  const int a = static_cast<int>(tri[3 * t]), b = static_cast<int>(tri[3 * t + 1]),
+            c = static_cast<int>(tri[3 * t + 2]);
+  if (v == a || v == b || v == c || allKinematic(p, v, a, b, c)) return;
   const Vec3Array& x = bounds.path_start;
   const Vec3Array& move = bounds.path_move;
   // How far each particle may leave its path.
   auto deviation = [&](int i) { return bounds.path_slack * p.radius[i]; };
-  const auto& tri = topology.triangles;
-  const int triangles = topology.triangleCount();
-  triangle_lo_.resize(triangles);
-  triangle_hi_.resize(triangles);
-  double cell = 0.0;
-  for (int t = 0; t < triangles; ++t) {
-    const unsigned a = tri[3 * t], b = tri[3 * t + 1], c = tri[3 * t + 2];
-    triangle_lo_[t] = grown_lo_[a].cwiseMin(grown_lo_[b]).cwiseMin(grown_lo_[c]);
-    triangle_hi_[t] = grown_hi_[a].cwiseMax(grown_hi_[b]).cwiseMax(grown_hi_[c]);
-    cell += (triangle_hi_[t] - triangle_lo_[t]).maxCoeff() / triangles;
-  }
-  if (!(cell > 0.0) || !std::isfinite(cell)) return;
-  triangle_hash_.build(triangle_lo_, triangle_hi_, triangles, cell);
-  auto query = [&](int v, std::vector<SelfContactPair>& into) {
-    triangle_hash_.forEachOverlapping(grown_lo_[v], grown_hi_[v], [&](int t) {
-      const int a = static_cast<int>(tri[3 * t]), b = static_cast<int>(tri[3 * t + 1]),
-                c = static_cast<int>(tri[3 * t + 2]);
-      if (v == a || v == b || v == c || allKinematic(p, v, a, b, c)) return;
-      // The paths' cull (findPairs), where it can drop the pair at all: the distance is at
-      // most the diagonal of the two boxes together (a thickness as large as the cloth would
-      // otherwise add its cost to every pair of a search that lists them all).
-      const double reach =
-          thickness + deviation(v) + std::max({deviation(a), deviation(b), deviation(c)}) +
-          std::sqrt(std::max({(move[v] - move[a]).squaredNorm(), (move[v] - move[b]).squaredNorm(),
-                              (move[v] - move[c]).squaredNorm()}));
-      const Vec3 span =
-          grown_hi_[v].cwiseMax(triangle_hi_[t]) - grown_lo_[v].cwiseMin(triangle_lo_[t]);
-      if (reach * reach < span.squaredNorm() &&
-          pointTriangleDistance(x[v], x[a], x[b], x[c]) > reach) {
-        return;
-      }
-      ContactGeometry start;
-      if (!vertexTriangle(p.step_start[v], p.step_start[a], p.step_start[b], p.step_start[c],
-                          start)) {
-        return;
-      }
-      SelfContactPair pair;
-      pair.index[0] = v;
-      pair.index[1] = a;
-      pair.index[2] = b;
-      pair.index[3] = c;
-      pair.side = start.distance >= 0.0 ? 1.0 : -1.0;
-      into.push_back(pair);
-    });
-  };
-  const int threads = pool != nullptr ? pool->threads() : 1;
-  if (threads == 1) {
-    for (int v = 0; v < p.cloth_count; ++v) query(v, found);
+  // The paths' cull (findPairs), where it can drop the pair at all: the distance is at most the
+  // diagonal of the two boxes together (a thickness as large as the cloth would otherwise add its
+  // cost to every pair of a search that lists them all).
+  const double reach =
+      thickness + deviation(v) + std::max({deviation(a), deviation(b), deviation(c)}) +
+      std::sqrt(std::max({(move[v] - move[a]).squaredNorm(), (move[v] - move[b]).squaredNorm(),
+                          (move[v] - move[c]).squaredNorm()}));
+  const Vec3 span = grown_hi_[v].cwiseMax(triangle_hi_[t]) - grown_lo_[v].cwiseMin(triangle_lo_[t]);
+  if (reach * reach < span.squaredNorm() && pointTriangleDistance(x[v], x[a], x[b], x[c]) > reach) {
     return;
   }
-  // Threads take consecutive ranges of vertices: joined in order, the list is the one above.
-  sizeThreadLists(threads);
-  auto job = [&](int t) {
-    const int begin = WorkerPool::rangeBegin(p.cloth_count, t, threads);
-    const int end = WorkerPool::rangeBegin(p.cloth_count, t + 1, threads);
-    for (int v = begin; v < end; ++v) query(v, thread_pairs_[t]);
-  };
-  pool->run(job);
-  joinThreadLists(threads, found);
+  ContactGeometry start;
+  if (!vertexTriangle(p.step_start[v], p.step_start[a], p.step_start[b], p.step_start[c], start)) {
+    return;
+  }
+  SelfContactPair pair;
+  pair.index[0] = v;
+  pair.index[1] = a;
+  pair.index[2] = b;
+  pair.index[3] = c;
+  pair.side = start.distance >= 0.0 ? 1.0 : -1.0;
+  vertex_found_.push_back(pair);
 }
 
-void SelfCollision::findEdgeEdgePairs(const Particles& p, const ClothTopology& topology,
-                                      const MotionBounds& bounds, double thickness,
-                                      WorkerPool* pool, std::vector<SelfContactPair>& found) {
+// Edges of one grid cell or of neighbouring cells (some end points within one row and column)
+// are left out: nearly coplanar while the cloth is smooth, they would get a side by chance, and
+// folding them onto each other is already stopped by the vertex-triangle contacts.
+// A mesh cloth: the particles sharing a triangle or a hinge, which on a grid are exactly these.
+bool SelfCollision::neighbours(int u, int v, const ClothTopology& topology) const {
+  if (topology.from_mesh) return topology.meshNear(u, v);
+  const int cols = topology.cols;
+  const int dr = u / cols - v / cols, dc = u % cols - v % cols;
+  return dr >= -1 && dr <= 1 && dc >= -1 && dc <= 1;
+}
+
+void SelfCollision::addEdgeEdge(int e, int f, const Particles& p, const ClothTopology& topology,
+                                const MotionBounds& bounds, double thickness) {
+  if (!((edge_lo_[e].array() <= edge_hi_[f].array()).all() &&
+        (edge_lo_[f].array() <= edge_hi_[e].array()).all())) {
+    return;
+  }
+  const int a = edges_[e][0], b = edges_[e][1], c = edges_[f][0], d = edges_[f][1];
+  if (neighbours(a, c, topology) || neighbours(a, d, topology) || neighbours(b, c, topology) ||
+      neighbours(b, d, topology) || allKinematic(p, a, b, c, d)) {
+    return;
+  }
   const Vec3Array& x = bounds.path_start;
   const Vec3Array& move = bounds.path_move;
   auto deviation = [&](int i) { return bounds.path_slack * p.radius[i]; };
-  // Edges of one grid cell or of neighbouring cells (some end points within one row and column)
-  // are left out: nearly coplanar while the cloth is smooth, they would get a side by chance, and
-  // folding them onto each other is already stopped by the vertex-triangle contacts.
-  // A mesh cloth: the particles sharing a triangle or a hinge, which on a grid are exactly these.
-  const int cols = topology.cols;
-  const bool mesh = topology.from_mesh;
-  auto near = [cols, mesh, &topology](int u, int v) {
-    if (mesh) return topology.meshNear(u, v);
-    const int dr = u / cols - v / cols, dc = u % cols - v % cols;
-    return dr >= -1 && dr <= 1 && dc >= -1 && dc <= 1;
-  };
-  const int edges = static_cast<int>(edges_.size());
-  edge_lo_.resize(edges);
-  edge_hi_.resize(edges);
-  double cell = 0.0;
-  for (int e = 0; e < edges; ++e) {
-    const int a = edges_[e][0], b = edges_[e][1];
-    edge_lo_[e] = grown_lo_[a].cwiseMin(grown_lo_[b]);
-    edge_hi_[e] = grown_hi_[a].cwiseMax(grown_hi_[b]);
-    cell += (edge_hi_[e] - edge_lo_[e]).maxCoeff() / edges;
-  }
-  if (!(cell > 0.0) || !std::isfinite(cell)) return;
-  edge_hash_.build(edge_lo_, edge_hi_, edges, cell);
-  auto keep = [&](int e, int f, std::vector<SelfContactPair>& into) {
-    const int a = edges_[e][0], b = edges_[e][1], c = edges_[f][0], d = edges_[f][1];
-    if (near(a, c) || near(a, d) || near(b, c) || near(b, d) || allKinematic(p, a, b, c, d)) {
-      return;
-    }
-    // The paths' cull (findPairs), for points of the two edges: convex combinations of a, b and
-    // of c, d.
-    const double reach =
-        thickness + std::max(deviation(a), deviation(b)) + std::max(deviation(c), deviation(d)) +
-        std::sqrt(std::max({(move[a] - move[c]).squaredNorm(), (move[a] - move[d]).squaredNorm(),
-                            (move[b] - move[c]).squaredNorm(), (move[b] - move[d]).squaredNorm()}));
-    const Vec3 span = edge_hi_[e].cwiseMax(edge_hi_[f]) - edge_lo_[e].cwiseMin(edge_lo_[f]);
-    if (reach * reach < span.squaredNorm() &&
-        segmentSegmentDistance(x[a], x[b], x[c], x[d]) > reach) {
-      return;
-    }
-    SelfContactPair pair;
-    pair.index[0] = a;
-    pair.index[1] = b;
-    pair.index[2] = c;
-    pair.index[3] = d;
-    pair.edge_edge = true;
-    ContactGeometry start;
-    if (geometry(pair, p.step_start, start) && start.distance != 0.0) {
-      pair.side = start.distance > 0.0 ? 1.0 : -1.0;
-    }
-    into.push_back(pair);
-  };
-  // On a grid, the neighbours' pairs (most of those whose boxes overlap) are left out by their
-  // rows and columns before the boxes are read.
-  auto neighbours = [this](int e, int f) {
-    if (edge_grid_.empty()) return false;
-    const std::array<int, 4>& u = edge_grid_[e];
-    const std::array<int, 4>& v = edge_grid_[f];
-    auto near_grid = [](int r0, int c0, int r1, int c1) {
-      return std::abs(r0 - r1) <= 1 && std::abs(c0 - c1) <= 1;
-    };
-    return near_grid(u[0], u[1], v[0], v[1]) || near_grid(u[0], u[1], v[2], v[3]) ||
-           near_grid(u[2], u[3], v[0], v[1]) || near_grid(u[2], u[3], v[2], v[3]);
-  };
-  const int threads = pool != nullptr ? pool->threads() : 1;
-  if (threads == 1) {
-    edge_hash_.forEachOverlappingPairIn(0, edge_hash_.bucketCount(), true, neighbours,
-                                        [&](int e, int f) { keep(e, f, found); });
+  // The paths' cull (findPairs), for points of the two edges: convex combinations of a, b and
+  // of c, d.
+  const double reach =
+      thickness + std::max(deviation(a), deviation(b)) + std::max(deviation(c), deviation(d)) +
+      std::sqrt(std::max({(move[a] - move[c]).squaredNorm(), (move[a] - move[d]).squaredNorm(),
+                          (move[b] - move[c]).squaredNorm(), (move[b] - move[d]).squaredNorm()}));
+  const Vec3 span = edge_hi_[e].cwiseMax(edge_hi_[f]) - edge_lo_[e].cwiseMin(edge_lo_[f]);
+  if (reach * reach < span.squaredNorm() &&
+      segmentSegmentDistance(x[a], x[b], x[c], x[d]) > reach) {
     return;
   }
-  // Threads take consecutive ranges of the hash's buckets, the first also the overflow boxes:
-  // joined in order, the list is the one of the whole self-join above.
-  sizeThreadLists(threads);
-  const std::size_t buckets = edge_hash_.bucketCount();
-  auto job = [&](int t) {
-    const std::size_t first = buckets * t / threads, end = buckets * (t + 1) / threads;
-    edge_hash_.forEachOverlappingPairIn(first, end, t == 0, neighbours,
-                                        [&](int e, int f) { keep(e, f, thread_pairs_[t]); });
-  };
-  pool->run(job);
-  joinThreadLists(threads, found);
+  SelfContactPair pair;
+  pair.index[0] = a;
+  pair.index[1] = b;
+  pair.index[2] = c;
+  pair.index[3] = d;
+  pair.edge_edge = true;
+  ContactGeometry start;
+  if (geometry(pair, p.step_start, start) && start.distance != 0.0) {
+    pair.side = start.distance > 0.0 ? 1.0 : -1.0;
+  }
+  pairs_.push_back(pair);
 }
 
 void SelfCollision::preStabilize(Particles& p, double thickness, double max_shift,

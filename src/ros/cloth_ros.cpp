@@ -22,6 +22,9 @@
 namespace pbd_cloth {
 namespace {
 
+// Messages of ~state kept per subscriber while its connection is busy (ClothRos::ClothRos).
+constexpr uint32_t kStateQueue = 10;
+
 // ~grasp_by_name values, case-insensitive.
 bool parseGrasp(std::string value, bool& grasp) {
   std::transform(value.begin(), value.end(), value.begin(),
@@ -84,7 +87,11 @@ ClothRos::ClothRos(ros::NodeHandle nh, ros::NodeHandle nh_private)
   pose_transformer_ = std::make_unique<PoseTransformer>(
       tf_buffer_, PoseTransformer::Config{scene.frame_id, config_.tf_timeout});
 
-  state_pub_ = nh_private_.advertise<ClothState>("state", 1);
+  // ~state keeps up to kStateQueue messages per subscriber while its connection is busy: a reset
+  // or set state publishes its state at once and the next step's follows at free-running speed, so
+  // with a queue of one the state a client asked for could be replaced before it was sent (a fresh
+  // clone's CI saw it: PublishClock.ResetAnswersAndKeepsTheClockGoingForward).
+  state_pub_ = nh_private_.advertise<ClothState>("state", kStateQueue);
   markers_pub_ = nh_private_.advertise<visualization_msgs::MarkerArray>("markers", 1);
   reset_service_ = nh_private_.advertiseService("reset", &ClothRos::resetCallback, this);
   get_state_service_ = nh_private_.advertiseService("get_state", &ClothRos::getStateCallback, this);

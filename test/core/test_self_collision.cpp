@@ -4,17 +4,23 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <set>
 #include <string>
 
 #include "collision_scenes.h"
 #include "pbd_cloth/cloth_mesh.h"
 #include "pbd_cloth/metrics.h"
+#include "pbd_cloth/scene_yaml.h"
 #include "pbd_cloth/simulation.h"
 
 namespace pbd_cloth {
 namespace {
+
+const std::string kSourceDirectory = PBD_CLOTH_SOURCE_DIR;
 
 Waypoint waypoint(double t, const Vec3& position, int grasp = -1) {
   Waypoint w;
@@ -134,7 +140,7 @@ TEST(SelfCollision, FoldWithoutSelfCollisionIntersects) {
 // folds over it; the two halves hang against each other. Zero intersections every frame, no
 // particle inside the rod. (Contact with obstacles is per particle: a rod thinner than the gap
 // between two particles, spacing - 2 (radius + h) here, lets the cloth through between them.)
-TEST(SelfCollision, DropOntoThinRodNeverIntersects) {
+SceneConfig rodScene() {
   const int n = 16;
   const double spacing = 0.02, h = 0.004;
   SceneConfig scene = test::clothScene(n, n, spacing, Method::kXpbd);
@@ -147,6 +153,13 @@ TEST(SelfCollision, DropOntoThinRodNeverIntersects) {
   scene.cloth.origin = Vec3(-0.5 * (n - 1) * spacing, 0.5 * (n - 1) * spacing, 0.1);
   const Eigen::Quaterniond along_y(Eigen::AngleAxisd(test::kPiValue / 2.0, Vec3::UnitX()));
   scene.obstacles = {test::capsule("rod", 0.01, 0.6, test::makePose(Vec3::Zero(), along_y))};
+  return scene;
+}
+
+TEST(SelfCollision, DropOntoThinRodNeverIntersects) {
+  const int n = 16;
+  const double h = 0.004;
+  const SceneConfig scene = rodScene();
   Simulation sim(scene);
   int worst = 0;
   double deepest = 0.0;
@@ -224,6 +237,137 @@ TEST(SelfCollision, FlatClothFallingAsAWholeListsNoNeighbours) {
     ASSERT_EQ(stats.broad_phase_runs, 1) << "step " << k;
   }
   EXPECT_LT(sim.particles().position[0].z(), 1.5);  // it fell (1.8 m/s after 0.5 s)
+}
+
+// The triangle tree's flat patches (triangle_tree.h) leave out only pairs that cannot touch: on
+// states of the fold (layers meeting and swinging apart) and of the T-shirt (a mesh, its front and
+// back lying flat on each other: parallel layers that no patch may hold), every vertex-triangle and
+// edge-edge pair within 2 h (the thickness plus the two particles' path slack, what any search
+// must list) is among the tree's candidates, compared with every pair of the cloth. The tree
+// is built at the cloth's rest shape, as the simulation does, and searched with each state's
+// motion over the next step. (The drape, 32 x 32 or 45 x 45, brings no pair within 2 h.)
+struct CandidateCheck {
+  long close = 0;   // pairs within 2 h, all of which must be listed
+  long missed = 0;  // of those, not listed
+  long listed = 0;  // the tree's candidates
+};
+
+CandidateCheck checkCandidates(SelfCollision& search, const Particles& p,
+                               const ClothTopology& topology, double h, double dt) {
+  const int n = p.cloth_count;
+  Vec3Array lo(p.size()), hi(p.size()), move(p.size());
+  for (int i = 0; i < p.size(); ++i) {
+    move[i] = dt * p.velocity[i];
+    const Vec3 end = p.position[i] + move[i];
+    lo[i] = p.position[i].cwiseMin(end).array() - 0.5 * p.radius[i];
+    hi[i] = p.position[i].cwiseMax(end).array() + 0.5 * p.radius[i];
+  }
+  Particles at = p;
+  at.step_start = p.position;
+  search.findPairs(at, topology, MotionBounds{lo, hi, p.position, move, 0.5}, h, true);
+  std::set<std::array<int, 4>> listed;
+  for (const SelfContactPair& pair : search.pairs()) {
+    listed.insert({pair.index[0], pair.index[1], pair.index[2], pair.index[3]});
+  }
+  CandidateCheck check;
+  check.listed = static_cast<long>(listed.size());
+  const Vec3Array& x = p.position;
+  const auto& tri = topology.triangles;
+  for (int t = 0; t < topology.triangleCount(); ++t) {
+    const int a = static_cast<int>(tri[3 * t]), b = static_cast<int>(tri[3 * t + 1]),
+              c = static_cast<int>(tri[3 * t + 2]);
+    for (int v = 0; v < n; ++v) {
+      if (v == a || v == b || v == c) continue;
+      if (pointTriangleDistance(x[v], x[a], x[b], x[c]) > 2.0 * h) continue;
+      ++check.close;
+      if (!listed.count({v, a, b, c})) ++check.missed;
+    }
+  }
+  std::set<std::array<int, 2>> edge_set;
+  for (int t = 0; t < topology.triangleCount(); ++t) {
+    for (int e = 0; e < 3; ++e) {
+      const int a = static_cast<int>(tri[3 * t + e]),
+                b = static_cast<int>(tri[3 * t + (e + 1) % 3]);
+      edge_set.insert({std::min(a, b), std::max(a, b)});
+    }
+  }
+  const std::vector<std::array<int, 2>> edges(edge_set.begin(), edge_set.end());
+  auto near = [&](int u, int v) {
+    if (topology.from_mesh) return topology.meshNear(u, v);
+    return std::abs(u / topology.cols - v / topology.cols) <= 1 &&
+           std::abs(u % topology.cols - v % topology.cols) <= 1;
+  };
+  for (std::size_t e = 0; e < edges.size(); ++e) {
+    for (std::size_t f = e + 1; f < edges.size(); ++f) {
+      const auto [a, b] = edges[e];
+      const auto [c, d] = edges[f];
+      if (near(a, c) || near(a, d) || near(b, c) || near(b, d)) continue;
+      if (segmentSegmentDistance(x[a], x[b], x[c], x[d]) > 2.0 * h) continue;
+      ++check.close;
+      if (!listed.count({a, b, c, d}) && !listed.count({c, d, a, b})) ++check.missed;
+    }
+  }
+  return check;
+}
+
+void expectTreeListsEveryClosePair(const SceneConfig& scene, const std::vector<int>& at_steps,
+                                   const char* what) {
+  Simulation sim(scene);
+  SelfCollision search;
+  search.reserve(sim.particles(), sim.topology());  // the tree at the rest shape
+  const double dt = 1.0 / scene.step_rate;
+  long close = 0, missed = 0, listed = 0;
+  int step = 0;
+  for (int target : at_steps) {
+    for (; step < target; ++step) sim.step();
+    const CandidateCheck check =
+        checkCandidates(search, sim.particles(), sim.topology(), scene.cloth.thickness, dt);
+    close += check.close;
+    missed += check.missed;
+    listed += check.listed;
+    EXPECT_EQ(check.missed, 0) << what << ", step " << target << ": " << check.close
+                               << " pairs within 2 h";
+  }
+  std::printf("%s: %ld pairs within 2 h, %ld missed, %ld candidates listed\n", what, close, missed,
+              listed);
+  EXPECT_GT(close, 0) << what << ": no state brought the cloth near itself";
+}
+
+TEST(SelfCollision, TreeListsEveryPairWithinTwiceTheThickness) {
+  std::vector<int> fold_steps;
+  for (int k = 150; k < 240; k += 3) fold_steps.push_back(k);
+  expectTreeListsEveryClosePair(foldScene(true), fold_steps, "fold");
+  // Two separate squares, one 0.6 h above the other and facing the same way, falling together:
+  // parallel layers that nodes holding both would find flat, were they not two patches.
+  const double h = 0.005;
+  auto mesh = std::make_shared<ClothMesh>();
+  mesh->source = "two stacked squares";
+  const int side = 6;
+  for (const double z : {0.0, 0.6 * h}) {
+    const unsigned base = static_cast<unsigned>(mesh->vertices.size());
+    for (int r = 0; r < side; ++r) {
+      for (int c = 0; c < side; ++c) mesh->vertices.emplace_back(0.02 * c, 0.02 * r, z);
+    }
+    for (int r = 0; r + 1 < side; ++r) {
+      for (int c = 0; c + 1 < side; ++c) {
+        const unsigned k = base + static_cast<unsigned>(r * side + c);
+        const unsigned s = static_cast<unsigned>(side);
+        mesh->triangles.insert(mesh->triangles.end(), {k, k + 1, k + s + 1, k, k + s + 1, k + s});
+        mesh->triangle_face.insert(mesh->triangle_face.end(), {1, 1});
+      }
+    }
+  }
+  SceneConfig layers = test::clothScene(2, 2, 0.1, Method::kXpbd);
+  layers.cloth.mesh = mesh->source;
+  layers.cloth.mesh_data = mesh;
+  layers.cloth.origin = Vec3(0.0, 0.0, 1.0);
+  layers.cloth.rpy = Vec3::Zero();
+  layers.cloth.thickness = h;
+  layers.cloth.self_collision = true;
+  layers.cloth.pinned.clear();
+  expectTreeListsEveryClosePair(layers, {0, 5}, "two stacked squares");
+  SceneConfig shirt = loadScene(kSourceDirectory + "/config/tshirt.yaml");
+  expectTreeListsEveryClosePair(shirt, {0, 30, 60}, "tshirt");
 }
 
 }  // namespace
