@@ -137,6 +137,7 @@ class SelfCollision {
   int edge_pair_count_ = 0;
   std::vector<SelfContactPair> previous_;  // vertex-triangle pairs before a search within the step
   std::vector<SelfContactPair> vertex_found_;  // this search's vertex-triangle pairs, then sorted
+  std::vector<int> vertex_slot_;               // the counting sort's per-vertex counts, offsets
 };
 
 }  // namespace pbd_cloth

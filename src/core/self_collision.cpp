@@ -223,6 +223,7 @@ void SelfCollision::reserve(const Particles& particles, const ClothTopology& top
   pairs_.reserve(reserved_pairs_);
   previous_.reserve(reserved_pairs_);
   vertex_found_.reserve(reserved_pairs_);
+  vertex_slot_.assign(particles.cloth_count + 1, 0);
 }
 
 std::size_t SelfCollision::releaseExcessCapacity() {
@@ -275,13 +276,16 @@ void SelfCollision::findPairs(const Particles& p, const ClothTopology& topology,
     findLeafPairs(a, b, p, topology, bounds, thickness, edge_pairs);
   });
   if (edge_pairs) edge_pair_count_ = static_cast<int>(pairs_.size());
-  // By vertex, then triangle: the order carryVertexTriangleStates bisects, and one that does not
-  // depend on the tree's traversal.
-  std::sort(vertex_found_.begin(), vertex_found_.end(),
-            [](const SelfContactPair& x, const SelfContactPair& y) {
-              return std::lexicographical_compare(x.index, x.index + 4, y.index, y.index + 4);
-            });
-  pairs_.insert(pairs_.end(), vertex_found_.begin(), vertex_found_.end());
+  // By vertex (counting sort; a vertex's pairs in the order the traversal found them): the order
+  // carryVertexTriangleStates bisects.
+  std::fill(vertex_slot_.begin(), vertex_slot_.end(), 0);
+  for (const SelfContactPair& pair : vertex_found_) ++vertex_slot_[pair.index[0] + 1];
+  for (int v = 0; v < vertices; ++v) vertex_slot_[v + 1] += vertex_slot_[v];
+  const std::size_t start = pairs_.size();
+  pairs_.resize(start + vertex_found_.size());
+  for (const SelfContactPair& pair : vertex_found_) {
+    pairs_[start + static_cast<std::size_t>(vertex_slot_[pair.index[0]]++)] = pair;
+  }
   vertex_found_.clear();
   if (!edge_pairs) carryVertexTriangleStates();
 }

@@ -52,29 +52,38 @@ Cone merge(const Cone& a, const Cone& b) {
 
 Cone coneOf(const TriangleTree::Node& n) { return Cone{n.axis, n.cos_angle, n.sin_angle}; }
 
-// The cone of a triangle's normals along its corners' paths x_k + s u_k (TriangleTree::refit).
-Cone triangleCone(const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3& u0, const Vec3& u1,
-                  const Vec3& u2) {
+// Adds the unit directions of a triangle's normal along its corners' paths x_k + s u_k
+// (TriangleTree::refit: B0, B2 and, unless it vanishes, B1) to `directions`; false when the
+// normal has no direction at the start or at the end (the cone is then the whole sphere).
+bool addNormalDirections(const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3& u0,
+                         const Vec3& u1, const Vec3& u2, Vec3* directions, int& count) {
   const Vec3 e1 = x1 - x0, e2 = x2 - x0, d1 = u1 - u0, d2 = u2 - u0;
   const Vec3 b0 = e1.cross(e2);
   const Vec3 b2 = (e1 + d1).cross(e2 + d2);
   const Vec3 b1 = b0 + 0.5 * (e1.cross(d2) + d1.cross(e2));
   const double scale = e1.squaredNorm() * e2.squaredNorm();
-  Cone out;
   const double n0 = b0.squaredNorm(), n2 = b2.squaredNorm(), n1 = b1.squaredNorm();
-  if (!(n0 > kDegenerate * scale) || !(n2 > kDegenerate * scale)) return out;
-  const Vec3 a0 = b0 / std::sqrt(n0), a2 = b2 / std::sqrt(n2);
+  if (!(n0 > kDegenerate * scale) || !(n2 > kDegenerate * scale)) return false;
+  directions[count++] = b0 / std::sqrt(n0);
+  directions[count++] = b2 / std::sqrt(n2);
   // B1 near zero adds no direction (N(s) is then a combination of B0 and B2 alone).
-  const bool middle = n1 > kDegenerate * scale;
-  const Vec3 a1 = middle ? Vec3(b1 / std::sqrt(n1)) : Vec3::Zero();
-  const Vec3 sum = a0 + a1 + a2;
+  if (n1 > kDegenerate * scale) directions[count++] = b1 / std::sqrt(n1);
+  return true;
+}
+
+// The cone about the mean of `count` unit directions that holds them all.
+Cone coneOfDirections(const Vec3* directions, int count) {
+  Cone out;
+  Vec3 sum = Vec3::Zero();
+  for (int k = 0; k < count; ++k) sum += directions[k];
   const double length = sum.norm();
   if (!(length > 1e-12)) return out;
   out.axis = sum / length;
-  out.cos_angle = std::min(out.axis.dot(a0), out.axis.dot(a2));
-  if (middle) out.cos_angle = std::min(out.cos_angle, out.axis.dot(a1));
-  if (out.cos_angle <= -1.0) return Cone{};
-  out.sin_angle = std::sqrt(std::max(0.0, 1.0 - out.cos_angle * out.cos_angle));
+  double cos_angle = 1.0;
+  for (int k = 0; k < count; ++k) cos_angle = std::min(cos_angle, out.axis.dot(directions[k]));
+  if (cos_angle <= -1.0) return Cone{};
+  out.cos_angle = cos_angle;
+  out.sin_angle = std::sqrt(std::max(0.0, 1.0 - cos_angle * cos_angle));
   return out;
 }
 
@@ -186,6 +195,10 @@ void TriangleTree::refit(const std::vector<unsigned>& tri, const Vec3Array& tria
     Node& n = nodes_[k];
     Cone cone;
     if (n.left < 0) {
+      // A leaf's cone straight from its triangles' normal directions (no pairwise merging).
+      Vec3 directions[3 * kLeafTriangles];
+      int count = 0;
+      bool defined = true;
       const int first = order_[n.first];
       n.lo = triangle_lo[first];
       n.hi = triangle_hi[first];
@@ -194,9 +207,11 @@ void TriangleTree::refit(const std::vector<unsigned>& tri, const Vec3Array& tria
         const unsigned a = tri[3 * t], b = tri[3 * t + 1], c = tri[3 * t + 2];
         n.lo = n.lo.cwiseMin(triangle_lo[t]);
         n.hi = n.hi.cwiseMax(triangle_hi[t]);
-        const Cone own = triangleCone(x[a], x[b], x[c], u[a], u[b], u[c]);
-        cone = s == n.first ? own : merge(cone, own);
+        if (defined) {
+          defined = addNormalDirections(x[a], x[b], x[c], u[a], u[b], u[c], directions, count);
+        }
       }
+      if (defined) cone = coneOfDirections(directions, count);
     } else {
       const Node& l = nodes_[n.left];
       const Node& r = nodes_[n.right];
