@@ -111,6 +111,38 @@ void distribute(const SelfContactPair& pair, const ContactGeometry& g, double w,
   }
 }
 
+// Edge-edge pairs far apart, the common case of a step-start list (self_collision.h): their
+// boxes, and the sign of (p1 - q1) . (p21 x q21) without the closest points. apart() says the two
+// segments' boxes are more than `gap` apart along some axis, so their distance is more than gap.
+bool edgesApart(const SelfContactPair& pair, const Vec3Array& x, double gap) {
+  const Vec3& p1 = x[pair.index[0]];
+  const Vec3& p2 = x[pair.index[1]];
+  const Vec3& q1 = x[pair.index[2]];
+  const Vec3& q2 = x[pair.index[3]];
+  const Vec3 p_lo = p1.cwiseMin(p2), p_hi = p1.cwiseMax(p2);
+  const Vec3 q_lo = q1.cwiseMin(q2), q_hi = q1.cwiseMax(q2);
+  return ((q_lo - p_hi).array() > gap).any() || ((p_lo - q_hi).array() > gap).any();
+}
+
+// The sign of the distance edgeEdge gives, (p1 - q1) . n with n = p21 x q21 / |p21 x q21|
+// computed as edgeEdge does (the same sign to the bit), in `side` (0 when it is 0), without the
+// closest points; false where edgeEdge fails (edges too near parallel).
+bool edgeSide(const SelfContactPair& pair, const Vec3Array& x, double& side) {
+  const Vec3& p1 = x[pair.index[0]];
+  const Vec3& q1 = x[pair.index[2]];
+  const Vec3 d1 = x[pair.index[1]] - p1, d2 = x[pair.index[3]] - q1, r = p1 - q1;
+  const Vec3 cross = d1.cross(d2);
+  const double sine2 = cross.squaredNorm();
+  if (!(sine2 > kParallel * d1.squaredNorm() * d2.squaredNorm())) return false;
+  // r . cross has the sign of r . (cross / |cross|) unless it is within rounding of zero (each
+  // form is within a few ulp of sum |r_i cross_i|): only there the normalised form decides.
+  double distance = r.dot(cross);
+  const double terms = r.cwiseProduct(cross).cwiseAbs().sum();
+  if (!(std::abs(distance) > 1e-12 * terms)) distance = r.dot(cross / std::sqrt(sine2));
+  side = distance > 0.0 ? 1.0 : (distance < 0.0 ? -1.0 : 0.0);
+  return true;
+}
+
 bool allKinematic(const Particles& p, int a, int b, int c, int d) {
   return p.inverse_mass[a] == 0.0 && p.inverse_mass[b] == 0.0 && p.inverse_mass[c] == 0.0 &&
          p.inverse_mass[d] == 0.0;
@@ -467,16 +499,35 @@ double SelfCollision::project(Particles& p, double thickness, int substep,
       // the other side of parallel): their side is unknown until they diverge again, and it is
       // only frozen while they are within kEdgeBand thicknesses, where a change of sign can only
       // mean that they passed through each other.
-      ContactGeometry start;
-      if (!geometry(pair, p.substep_start, start)) {
-        if (pair.edge_edge) pair.side = 0.0;
-      } else if ((!start.inside || pair.side == 0.0 ||
-                  (pair.edge_edge && std::abs(start.distance) > kEdgeBand * thickness)) &&
-                 start.distance != 0.0) {
-        pair.side = start.distance > 0.0 ? 1.0 : -1.0;
+      // Edges more than kEdgeBand h apart at the substep start are either not facing each other
+      // or farther than the band: either way the side follows the start (below), which needs
+      // only the sign, not the closest points.
+      double side = 0.0;
+      if (pair.edge_edge && edgesApart(pair, p.substep_start, kEdgeBand * thickness)) {
+        if (!edgeSide(pair, p.substep_start, side)) {
+          pair.side = 0.0;
+        } else if (side != 0.0) {
+          pair.side = side;
+        }
+      } else {
+        ContactGeometry start;
+        if (!geometry(pair, p.substep_start, start)) {
+          if (pair.edge_edge) pair.side = 0.0;
+        } else if ((!start.inside || pair.side == 0.0 ||
+                    (pair.edge_edge && std::abs(start.distance) > kEdgeBand * thickness)) &&
+                   start.distance != 0.0) {
+          pair.side = start.distance > 0.0 ? 1.0 : -1.0;
+        }
       }
     }
     if (pair.side == 0.0) continue;
+    // Edges more than h apart now, on their side (the sign agrees with the distance's: facing
+    // each other, the distance is their distance, more than h), with nothing pushed this substep
+    // (a window of one substep: no friction either): no correction.
+    if (pair.edge_edge && state.depth == 0.0 && edgesApart(pair, p.position, thickness)) {
+      double side = 0.0;
+      if (!edgeSide(pair, p.position, side) || side * pair.side >= 0.0) continue;
+    }
     ContactGeometry g;
     if (!geometry(pair, p.position, g) || !g.inside) continue;
     const double w = inverseMass(pair, g, p);
