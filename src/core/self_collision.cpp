@@ -538,10 +538,10 @@ double SelfCollision::project(Particles& p, double thickness, int substep,
       // not prevent) is undone over several passes and substeps, the side frozen meanwhile,
       // instead of flinging the cloth (full pushes fed the whipping of stiff cloth into tangles
       // that grew without bound in the drape scene). h / 2 was too little once the cloth is fine
-      // and thin against its speed: the drape at 64 x 64 (h 2.5 mm, layers whipping at up to
-      // 8 m/s, 6.7 mm a substep) ended with 14 edge-triangle intersections at h / 2 and none at h;
-      // at 91 x 91, 58 at most and 15 at the end against 15 and 0 (scripts/self_collision_bench's
-      // scenes, `cloth_bench --duration 1`).
+      // and thin against its speed: over the first second of the drape at 64 x 64 (h 2.5 mm,
+      // layers whipping at up to 8 m/s, 6.7 mm a substep) the edge-triangle intersections reached
+      // 24 at h / 2 and 17 at h; at 91 x 91, 58 (15 still at the end) against 22 (none at the end)
+      // (scripts/self_collision_bench's scenes, `cloth_bench --duration 1 --sample-every 1`).
       const double push = contactIncrement(std::max(c, -kMaxPush * thickness), state);
       state.normal = pair.side * g.normal;
       distribute(pair, g, w, push * state.normal, p, &reaction);
