@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <memory>
 #include <set>
 #include <string>
 
@@ -183,6 +184,19 @@ TEST(SelfCollision, DropOntoThinRodNeverIntersects) {
   EXPECT_TRUE(sim.computeMetrics().finite);
 }
 
+// A free cloth made of `mesh` at 1 m, thickness h, with self-collision.
+SceneConfig meshClothScene(const std::shared_ptr<ClothMesh>& mesh, double h) {
+  SceneConfig scene = test::clothScene(2, 2, 0.1, Method::kXpbd);
+  scene.cloth.mesh = mesh->source;
+  scene.cloth.mesh_data = mesh;
+  scene.cloth.origin = Vec3(0.0, 0.0, 1.0);
+  scene.cloth.rpy = Vec3::Zero();
+  scene.cloth.thickness = h;
+  scene.cloth.self_collision = true;
+  scene.cloth.pinned.clear();
+  return scene;
+}
+
 // CollisionStats counts the two kinds of self-collision candidates apart. Two triangles that share
 // no vertex, one above the other in the same outline, 0.6 h apart (within the thickness, so every
 // box reaches the other layer): each of the 3 + 3 vertices is a candidate against the other
@@ -200,14 +214,7 @@ TEST(SelfCollision, StatsCountVertexTriangleAndEdgeEdgePairsApart) {
   }
   mesh->triangles = {0, 1, 2, 3, 4, 5};
   mesh->triangle_face = {1, 2};
-  SceneConfig scene = test::clothScene(2, 2, 0.1, Method::kXpbd);
-  scene.cloth.mesh = mesh->source;
-  scene.cloth.mesh_data = mesh;
-  scene.cloth.origin = Vec3(0.0, 0.0, 1.0);
-  scene.cloth.rpy = Vec3::Zero();
-  scene.cloth.thickness = h;
-  scene.cloth.self_collision = true;
-  scene.cloth.pinned.clear();
+  SceneConfig scene = meshClothScene(mesh, h);
   scene.solver.gravity = Vec3::Zero();
   Simulation sim(scene);
   sim.step();
@@ -357,15 +364,7 @@ TEST(SelfCollision, TreeListsEveryPairWithinTwiceTheThickness) {
       }
     }
   }
-  SceneConfig layers = test::clothScene(2, 2, 0.1, Method::kXpbd);
-  layers.cloth.mesh = mesh->source;
-  layers.cloth.mesh_data = mesh;
-  layers.cloth.origin = Vec3(0.0, 0.0, 1.0);
-  layers.cloth.rpy = Vec3::Zero();
-  layers.cloth.thickness = h;
-  layers.cloth.self_collision = true;
-  layers.cloth.pinned.clear();
-  expectTreeListsEveryClosePair(layers, {0, 5}, "two stacked squares");
+  expectTreeListsEveryClosePair(meshClothScene(mesh, h), {0, 5}, "two stacked squares");
   SceneConfig shirt = loadScene(kSourceDirectory + "/config/tshirt.yaml");
   expectTreeListsEveryClosePair(shirt, {0, 30, 60}, "tshirt");
 }
