@@ -19,7 +19,7 @@ constexpr double kParallel = 0.0027;
 // Edges keep their side only within this many thicknesses of each other (see project()), and a
 // contact pushes at most kMaxPush thicknesses per pass.
 constexpr double kEdgeBand = 3.0;
-constexpr double kMaxPush = 1.0;
+constexpr double kMaxPush = 0.5;
 // The projected point may lie this far (in barycentric units) outside the triangle and still count
 // as inside, so a vertex over a shared edge is never missed by both triangles through rounding.
 constexpr double kInsideTolerance = 1e-6;
@@ -534,14 +534,14 @@ double SelfCollision::project(Particles& p, double thickness, int substep,
     if (w == 0.0) continue;
     const double c = pair.side * g.distance - (thickness - pair.allowance);
     if (c < 0.0 || state.depth > 0.0) {
-      // At most h per pass: a contact found deep (a fast approach, or a tangle the solver did
+      // At most h / 2 per pass: a contact found deep (a fast approach, or a tangle the solver did
       // not prevent) is undone over several passes and substeps, the side frozen meanwhile,
       // instead of flinging the cloth (full pushes fed the whipping of stiff cloth into tangles
-      // that grew without bound in the drape scene). h / 2 was too little once the cloth is fine
-      // and thin against its speed: over the first second of the drape at 64 x 64 (h 2.5 mm,
-      // layers whipping at up to 8 m/s, 6.7 mm a substep) the edge-triangle intersections reached
-      // 24 at h / 2 and 17 at h; at 91 x 91, 58 (15 still at the end) against 22 (none at the end)
-      // (scripts/self_collision_bench's scenes, `cloth_bench --duration 1 --sample-every 1`).
+      // that grew without bound in the drape scene). h per pass was tried: fewer intersections
+      // on the drape at 64 x 64 and 91 x 91 (24 to 17 and 58 to 22 at most over 1 s), but at
+      // 128 x 128 the cloth blew up (1.4 million intersections, strain 2.7, 12 s a step
+      // against 244, 0.88 and 0.97 s: `cloth_bench --duration 0.5` at the scaling benchmark's
+      // 128 x 128 settings).
       const double push = contactIncrement(std::max(c, -kMaxPush * thickness), state);
       state.normal = pair.side * g.normal;
       distribute(pair, g, w, push * state.normal, p, &reaction);

@@ -87,7 +87,7 @@ TEST(SelfCollision, FoldByTwoGrippersNeverIntersects) {
   EXPECT_LT((p.position[15] - Vec3(0.0, 0.01, 0.5)).norm(), 1e-9);  // held by the right gripper
   EXPECT_LT((p.position[0] - Vec3(0.0, 0.0, 0.5)).norm(), 1e-9);
   // Layers that swing into each other at up to ~3 m/s are stopped within a few substeps (at most
-  // h per pass, self_collision.cpp), never through: the deepest approach stays below h.
+  // h / 2 per pass, self_collision.cpp), never through: the deepest approach stays below h.
   EXPECT_LT(deepest, h);
 }
 
