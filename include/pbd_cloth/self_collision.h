@@ -80,7 +80,8 @@ class SelfCollision {
   // search by at most r_v + max_k r_k + max_k |u_v - u_k| (k = a, b, c). A pair with
   //   d > h + r_v + max_k r_k + max_k |u_v - u_k|
   // cannot come within h before a particle leaves its path, which Collisions checks at every
-  // substep (and then searches again): it is left out.
+  // substep (and then searches again): it is left out. It drops the neighbours of a cloth moving
+  // as a whole, which the boxes alone list, where the tree's cones do not (a curved cloth).
   void findPairs(const Particles& particles, const ClothTopology& topology,
                  const MotionBounds& bounds, double thickness, bool edge_pairs);
 
@@ -103,9 +104,9 @@ class SelfCollision {
   int pairCount() const { return static_cast<int>(pairs_.size()); }
   // The candidates: edge-edge pairs first, then vertex-triangle pairs by vertex.
   const std::vector<SelfContactPair>& pairs() const { return pairs_; }
-  // Between steps: the candidate lists go back to
-  // their reserve once an extreme step that outgrew it is over (a fast fold can need many times the
-  // usual candidates, and a node that kept that peak for good would grow with every new extreme).
+  // Between steps: the candidate lists go back to their reserve once an extreme step that outgrew
+  // it is over (a fast fold can need many times the usual candidates, and a node that kept that
+  // peak for good would grow with every new extreme).
   // Returns the bytes released.
   std::size_t releaseExcessCapacity();
   int vertexTrianglePairCount() const { return pairCount() - edge_pair_count_; }
