@@ -33,6 +33,11 @@
 
 namespace pbd_cloth {
 
+// Whether the boxes [a_lo, a_hi] and [b_lo, b_hi] share a point.
+inline bool boxesOverlap(const Vec3& a_lo, const Vec3& a_hi, const Vec3& b_lo, const Vec3& b_hi) {
+  return (a_lo.array() <= b_hi.array()).all() && (b_lo.array() <= a_hi.array()).all();
+}
+
 class TriangleTree {
  public:
   struct Node {
@@ -81,16 +86,11 @@ class TriangleTree {
 
   const Node& node(int k) const { return nodes_[k]; }
   int triangle(int slot) const { return order_[slot]; }  // triangles in leaf order
-  int nodeCount() const { return static_cast<int>(nodes_.size()); }
-  double smallestAltitude() const { return smallest_altitude_; }
 
   static constexpr int kLeafTriangles = 4;
 
  private:
   int buildNode(int first, int count, const std::vector<Vec3>& centroid);
-  bool overlap(const Node& a, const Node& b) const {
-    return (a.lo.array() <= b.hi.array()).all() && (b.lo.array() <= a.hi.array()).all();
-  }
   bool share(const Node& a, const Node& b) const;
   bool flatTogether(const Node& a, const Node& b, double cos_flat) const;
 
@@ -110,7 +110,7 @@ class TriangleTree {
   void crossPairs(int i, int j, double cos_flat, Visit& visit) const {
     const Node& a = nodes_[i];
     const Node& b = nodes_[j];
-    if (!overlap(a, b)) return;
+    if (!boxesOverlap(a.lo, a.hi, b.lo, b.hi)) return;
     if (a.connected && b.connected && flatTogether(a, b, cos_flat) && share(a, b)) return;
     const bool a_leaf = a.left < 0, b_leaf = b.left < 0;
     if (a_leaf && b_leaf) {

@@ -351,10 +351,8 @@ void SelfCollision::findLeafPairs(int a, int b, const Particles& p, const ClothT
     // vertices and edges all touch it).
     for (int r = a == b ? s + 1 : second.first; r < second_end; ++r) {
       const int u = tree_.triangle(r);
-      if (!((triangle_lo_[t].array() <= triangle_hi_[u].array()).all() &&
-            (triangle_lo_[u].array() <= triangle_hi_[t].array()).all())) {
+      if (!boxesOverlap(triangle_lo_[t], triangle_hi_[t], triangle_lo_[u], triangle_hi_[u]))
         continue;
-      }
       for (int v : owned_vertices_[t]) {
         if (v >= 0) addVertexTriangle(v, u, p, topology, bounds, thickness);
       }
@@ -375,10 +373,7 @@ void SelfCollision::findLeafPairs(int a, int b, const Particles& p, const ClothT
 void SelfCollision::addVertexTriangle(int v, int t, const Particles& p,
                                       const ClothTopology& topology, const MotionBounds& bounds,
                                       double thickness) {
-  if (!((grown_lo_[v].array() <= triangle_hi_[t].array()).all() &&
-        (triangle_lo_[t].array() <= grown_hi_[v].array()).all())) {
-    return;
-  }
+  if (!boxesOverlap(grown_lo_[v], grown_hi_[v], triangle_lo_[t], triangle_hi_[t])) return;
   const auto& tri = topology.triangles;
   const int a = static_cast<int>(tri[3 * t]), b = static_cast<int>(tri[3 * t + 1]),
             c = static_cast<int>(tri[3 * t + 2]);
@@ -424,10 +419,7 @@ bool SelfCollision::neighbours(int u, int v, const ClothTopology& topology) cons
 
 void SelfCollision::addEdgeEdge(int e, int f, const Particles& p, const ClothTopology& topology,
                                 const MotionBounds& bounds, double thickness) {
-  if (!((edge_lo_[e].array() <= edge_hi_[f].array()).all() &&
-        (edge_lo_[f].array() <= edge_hi_[e].array()).all())) {
-    return;
-  }
+  if (!boxesOverlap(edge_lo_[e], edge_hi_[e], edge_lo_[f], edge_hi_[f])) return;
   const int a = edges_[e][0], b = edges_[e][1], c = edges_[f][0], d = edges_[f][1];
   if (neighbours(a, c, topology) || neighbours(a, d, topology) || neighbours(b, c, topology) ||
       neighbours(b, d, topology) || allKinematic(p, a, b, c, d)) {
