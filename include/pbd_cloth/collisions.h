@@ -39,6 +39,18 @@
 //   in it; a self-contact's side), so the search changes nothing for it. Self-contacts keep each
 //   vertex (edge) on the side of the triangle (edge) it was on, so a vertex pushed through a cloth
 //   layer is pulled back, never out of the far side.
+// - The search window: a search covers the next few substeps, not always the rest of the step.
+//   Its boxes and paths reach to the window's end, and the window's first substep searches again
+//   (edge-edge pairs too). Long windows search less often; short ones list fewer pairs, since a
+//   pair is listed when the window's motion can bring it within reach: where neighbours move
+//   apart fast (a corner whipping round a ball) the candidates grow with the window's length
+//   squared. solver.search_window fixes the window; 0, the default, chooses it per step
+//   (Collisions::endStep): a search costs about a pass over the particles (the tree's refit and
+//   traversal), a candidate a projection in every substep of its window, so after a step whose
+//   candidates, summed over its substeps, outnumbered the particles times its searches, the
+//   window halves, and where they came to less than a quarter of that, it doubles, up to the whole
+//   step. A cloth moving as a whole keeps the whole step (fabric_table: about 0 candidates);
+//   the drape at 128 x 128 settles at a few substeps.
 // - Initial overlaps: at each step start, pre-stabilisation separates contacts overlapping by more
 //   than a slop by at most max_separation_speed * dt, on positions before the prediction, so the
 //   separation adds no velocity (Macklin et al. 2014, sec. 4.4). What remains is only kept from
@@ -63,7 +75,9 @@ struct CollisionStats {
   int particle_pairs = 0;         // particle-particle candidates
   int vertex_triangle_pairs = 0;  // self-collision candidates: a vertex near a triangle
   int edge_edge_pairs = 0;        // self-collision candidates: two edges near each other
-  int broad_phase_runs = 0;       // 1, plus one per substep whose particles left their swept boxes
+  int broad_phase_runs = 0;       // 1, plus one per new window and per substep whose particles
+                                  // left their swept boxes
+  int search_window = 0;          // substeps one search covered (solver.search_window)
 };
 
 class Collisions {
@@ -89,6 +103,13 @@ class Collisions {
   // state, so maxPenetration() is right before the first step.
   void prepare(const Particles& particles, const ClothTopology& topology);
 
+  // Before each step: a contact search covers `window` substeps of the step's `substeps`
+  // (solver.search_window; 0: chosen from the steps before, "The search window" above).
+  void setSearchWindow(int window, int substeps);
+  // The window the adaptive rule holds for the next step (substeps; 0 before its first step). Part
+  // of a saved state (sim_state.h), so a saved run continues bit for bit.
+  int adaptiveSearchWindow() const { return adaptive_window_; }
+  void setAdaptiveSearchWindow(int window) { adaptive_window_ = window; }
   // Once per step, before the substeps. Moves particles only to pre-stabilise initial overlaps
   // (and then sets step_start to the result).
   void beginStep(Particles& particles, const ClothTopology& topology, double dt);
@@ -145,7 +166,10 @@ class Collisions {
   // particles' positions being those of fraction `fraction` of the step.
   void computeSweptBoxes(const Particles& particles, double box_time, double path_time,
                          double fraction);
-  void findCandidates(const Particles& particles, const ClothTopology& topology, bool step_start);
+  // `step_start`: the step's first search (no contact state to carry); `window_start`: a new
+  // search window (edge-edge pairs searched as well).
+  void findCandidates(const Particles& particles, const ClothTopology& topology, bool step_start,
+                      bool window_start);
   // Whether a particle left its swept box or (with `paths`: self-collision is active) a cloth
   // particle its reference path: the search's candidates then no longer cover every contact.
   bool leftMotionBounds(const Particles& particles, bool paths) const;
@@ -204,6 +228,16 @@ class Collisions {
   Vec3Array path_start_;
   Vec3Array path_move_;
   double path_fraction_ = 0.0;
+  // The search window: the setting (0: adaptive), the substeps of a step, the window of this
+  // step (substeps, and as a fraction of the step) and the fraction at which the current one ends.
+  int window_setting_ = 0;
+  int substeps_ = 1;
+  int window_substeps_ = 1;
+  double window_fraction_ = 1.0;
+  double window_end_ = 1.0;
+  // The adaptive rule: its window for the next step, and this step's searches.
+  int adaptive_window_ = 0;
+  int searches_in_step_ = 0;
   double substep_end_ = 0.0;
   ParticleContacts particle_contacts_;
   SelfCollision self_collision_pairs_;

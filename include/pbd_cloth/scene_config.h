@@ -57,6 +57,10 @@ struct Pose {
   }
 };
 
+// Upper limit of solver.substeps, solver.iterations and solver.search_window: not physics, but a
+// typo like substeps: 50000 would otherwise stall the node before anyone sees an error.
+constexpr int kMaxPasses = 1000;
+
 struct SolverConfig {
   Method method = Method::kXpbd;               // solver.method
   int substeps = 10;                           // solver.substeps, per step
@@ -93,6 +97,11 @@ struct SolverConfig {
   // ranges of particles. Bit-identical results for every count. 1 by default: a robot's computer
   // runs more than this node, and a spinning worker competes with it (README "Threads").
   int threads = 1;
+  // solver.search_window: substeps one contact search (particle-particle and self-collision
+  // candidates) covers. 0 (the default): chosen per step from the last one's candidates
+  // (Collisions, "search window"); k >= 1: every k substeps, a search more wherever a particle
+  // leaves its motion bounds; k >= substeps: once per step.
+  int search_window = 0;
   // solver.sleep_speed (m/s) and solver.sleep_time (s): when every free particle has moved slower
   // than sleep_speed for sleep_time, the scene sleeps: steps cost a check instead of a solve
   // until something could move it (Simulation::step, "Sleeping"). 0 = never sleeps (the default,

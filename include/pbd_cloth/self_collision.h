@@ -62,13 +62,14 @@ class SelfCollision {
   // Sizes the buffers and lists the mesh's edges.
   void reserve(const Particles& particles, const ClothTopology& topology);
 
-  // Broad phase, once per step: each cloth vertex whose swept box comes within h of a triangle's
-  // swept box (the triangle's own vertices excepted) and that the reference paths do not keep
-  // farther than h from it (below) and, with `edge_pairs`, each pair of edges of cells that are
-  // not neighbours whose swept boxes come within h. The sides come from the step-start positions.
-  // A repeated broad phase within the step (a particle left its box) passes edge_pairs = false: it
-  // renews the vertex-triangle pairs, the primary contacts, and keeps the edge-edge pairs of the
-  // step start; a vertex-triangle pair found again keeps its side and contact state.
+  // Broad phase, once per search window: each cloth vertex whose swept box comes within h of a
+  // triangle's swept box (the triangle's own vertices excepted) and that the reference paths do
+  // not keep farther than h from it (below) and, with `edge_pairs`, each pair of edges of cells
+  // that are not neighbours whose swept boxes come within h. The sides come from the step-start
+  // positions. A repeated search within the window (a particle left its box) passes edge_pairs =
+  // false: it renews the vertex-triangle pairs, the primary contacts, and keeps the edge-edge
+  // pairs of the window's start. With `keep_states` (any search after the step's first) a pair
+  // found again keeps its side and contact state.
   // The candidates come from the triangle tree (triangle_tree.h): pairs of leaves whose boxes
   // overlap, flat patches left out. Each vertex and each edge is owned by one of its triangles, so
   // a leaf pair lists the owned vertices of either side's triangles against the other's
@@ -83,7 +84,7 @@ class SelfCollision {
   // substep (and then searches again): it is left out. It drops the neighbours of a cloth moving
   // as a whole, which the boxes alone list, where the tree's cones do not (a curved cloth).
   void findPairs(const Particles& particles, const ClothTopology& topology,
-                 const MotionBounds& bounds, double thickness, bool edge_pairs);
+                 const MotionBounds& bounds, double thickness, bool edge_pairs, bool keep_states);
 
   // Pre-stabilisation: pushes contacts closer than h by more than the slop (a fraction of h) apart
   // by at most max_shift, on the positions before the step's first prediction (no velocity).
@@ -97,6 +98,15 @@ class SelfCollision {
   // (Collisions::kinematicReaction).
   double project(Particles& particles, double thickness, int substep,
                  const FrictionConfig& friction, Vec3Array& reaction);
+
+  // Candidates more than a few thicknesses apart at a substep's start (their boxes), summed over
+  // the substeps since the last call: listed for the motion of their search window, not for their
+  // nearness (Collisions' adaptive search window). Returns the sum and starts a new one.
+  long takeFarPairSubsteps() {
+    const long sum = far_pair_substeps_;
+    far_pair_substeps_ = 0;
+    return sum;
+  }
 
   // Deepest violation h - s distance over the contacts that are active (vertex over its
   // triangle; edges' closest points interior, edges within a few thicknesses) (m).
@@ -121,7 +131,11 @@ class SelfCollision {
   void addEdgeEdge(int e, int f, const Particles& particles, const ClothTopology& topology,
                    const MotionBounds& bounds, double thickness);
   bool neighbours(int u, int v, const ClothTopology& topology) const;
-  void carryVertexTriangleStates();
+  using PairIterator = std::vector<SelfContactPair>::iterator;
+  // Moves `found` to the end of pairs_, ordered by each pair's first particle.
+  void appendByFirstParticle(std::vector<SelfContactPair>& found, int particles);
+  void carryStates(PairIterator begin, PairIterator end, PairIterator old_begin,
+                   PairIterator old_end);
 
   std::vector<std::array<int, 2>> edges_;
   TriangleTree tree_;
@@ -136,8 +150,11 @@ class SelfCollision {
   std::size_t reserved_pairs_ = 0;      // capacity reserve() gave pairs_ and previous_
   std::vector<SelfContactPair> pairs_;  // edge-edge pairs first, then vertex-triangle pairs
   int edge_pair_count_ = 0;
-  std::vector<SelfContactPair> previous_;  // vertex-triangle pairs before a search within the step
+  std::vector<SelfContactPair> previous_;      // the pairs a search within the step replaces
+  int previous_edge_count_ = 0;                // edge-edge pairs at the front of previous_
+  long far_pair_substeps_ = 0;                 // takeFarPairSubsteps
   std::vector<SelfContactPair> vertex_found_;  // this search's vertex-triangle pairs, then sorted
+  std::vector<SelfContactPair> edge_found_;    // this search's edge-edge pairs, then sorted
   std::vector<int> vertex_slot_;               // the counting sort's per-vertex counts, offsets
 };
 

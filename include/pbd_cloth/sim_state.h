@@ -15,8 +15,10 @@
 // - robot_links: pose, target, live (off robot.joint_trajectory), enabled.
 // - mesh_contacts: per (particle, mesh collider) the closest triangle of the last query and the
 //   distance and place of it. The triangle is the search's first guess and decides between
-//   equally near triangles; the distance bounds the next one (collisions.cpp). Only the pairs that
-//   were ever queried are listed.
+//   equally near triangles; the distance bounds the next one (collisions.cpp).
+// - search_window: the contact search window the adaptive rule chose for the next step (substeps;
+//   Collisions, "The search window"); it shapes the next step's candidates and so its result. Only
+//   the pairs that were ever queried are listed.
 // What is not carried, because the step rebuilds it before using it: kinematic targets, contact
 // candidates and their friction windows (found anew every step), XPBD multipliers (zero at every
 // substep), tethers (rebuilt from the kinematic set), inverse masses (the scene's, zero for held
@@ -72,12 +74,15 @@ struct SimulationState {
   std::vector<BodySnapshot> colliders;    // scene obstacles, then robot collision elements
   std::vector<BodySnapshot> robot_links;  // one per URDF link
   std::vector<MeshContactCache> mesh_contacts;
+  int search_window = 0;  // substeps; 0: none chosen yet (the whole step)
 };
 
 // The state file: "PBDSTATE", a format version (uint32), then the fields in the order of
 // SimulationState, every number in the machine's own binary (IEEE doubles, little-endian on every
 // platform ROS supports): nothing is rounded, so a state read back is the state written.
-constexpr std::uint32_t kStateFileVersion = 1;
+// Version 2 added search_window at the end; a version 1 file still reads (search_window 0).
+constexpr std::uint32_t kStateFileVersion = 2;
+constexpr std::uint32_t kOldestStateFileVersion = 1;
 void writeState(std::ostream& out, const SimulationState& state);
 // False with the reason (wrong magic or version, truncated, implausible sizes) on a bad file;
 // whether the state fits a scene is Simulation::setState's question.
@@ -85,8 +90,8 @@ bool readState(std::istream& in, SimulationState& state, std::string& reason);
 bool writeStateFile(const std::string& path, const SimulationState& state, std::string& reason);
 bool readStateFile(const std::string& path, SimulationState& state, std::string& reason);
 
-// The part of the state a ROS message does not spell out field by field (substep_start and
-// mesh_contacts), in the same binary form: the messages' `solver_data`.
+// The part of the state a ROS message does not spell out field by field (substep_start,
+// mesh_contacts and search_window), in the same binary form: the messages' `solver_data`.
 std::vector<std::uint8_t> encodeSolverData(const SimulationState& state);
 bool decodeSolverData(const std::vector<std::uint8_t>& data, SimulationState& state,
                       std::string& reason);

@@ -61,8 +61,7 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 // Upper limits that are not physics but protect the process: a typo like rows: 50000 would
-// otherwise allocate gigabytes before anyone sees an error.
-constexpr int kMaxPasses = 1000;
+// otherwise allocate gigabytes before anyone sees an error. (kMaxPasses: scene_config.h.)
 
 std::string formatNumber(double value) {
   std::ostringstream out;
@@ -199,6 +198,7 @@ void validateSolver(const SolverConfig& s) {
   checkNumber("solver.bend_spring_stiffness", s.bend_spring_stiffness, kNonNegative);
   checkInteger("solver.levels", s.levels, 0, 16);
   checkInteger("solver.threads", s.threads, 1, 64);
+  checkInteger("solver.search_window", s.search_window, 0, kMaxPasses);
   checkNumber("solver.sleep_speed", s.sleep_speed, kNonNegative);
   checkNumber("solver.sleep_time", s.sleep_time, kPositive);
   checkNumber("solver.max_speed", s.max_speed, kPositive);

@@ -124,6 +124,16 @@ bool edgesApart(const SelfContactPair& pair, const Vec3Array& x, double gap) {
   return ((q_lo - p_hi).array() > gap).any() || ((p_lo - q_hi).array() > gap).any();
 }
 
+// A vertex more than `gap` from its triangle's box along some axis.
+bool vertexApart(const SelfContactPair& pair, const Vec3Array& x, double gap) {
+  const Vec3& v = x[pair.index[0]];
+  const Vec3& a = x[pair.index[1]];
+  const Vec3& b = x[pair.index[2]];
+  const Vec3& c = x[pair.index[3]];
+  const Vec3 lo = a.cwiseMin(b).cwiseMin(c), hi = a.cwiseMax(b).cwiseMax(c);
+  return ((lo - v).array() > gap).any() || ((v - hi).array() > gap).any();
+}
+
 // The sign of the distance edgeEdge gives, (p1 - q1) . n with n = p21 x q21 / |p21 x q21|
 // computed as edgeEdge does (the same sign to the bit), in `side` (0 when it is 0), without the
 // closest points; false where edgeEdge fails (edges too near parallel).
@@ -255,25 +265,34 @@ void SelfCollision::reserve(const Particles& particles, const ClothTopology& top
   pairs_.reserve(reserved_pairs_);
   previous_.reserve(reserved_pairs_);
   vertex_found_.reserve(reserved_pairs_);
+  edge_found_.reserve(reserved_pairs_);
   vertex_slot_.assign(particles.cloth_count + 1, 0);
 }
 
 std::size_t SelfCollision::releaseExcessCapacity() {
   // The search's vertex list is scratch, empty between searches: it keeps at most the reserve.
   return shrinkToReserve(vertex_found_, reserved_pairs_) +
-         shrinkToReserve(pairs_, reserved_pairs_) + shrinkToReserve(previous_, reserved_pairs_);
+         shrinkToReserve(edge_found_, reserved_pairs_) + shrinkToReserve(pairs_, reserved_pairs_) +
+         shrinkToReserve(previous_, reserved_pairs_);
 }
 
 void SelfCollision::findPairs(const Particles& p, const ClothTopology& topology,
-                              const MotionBounds& bounds, double thickness, bool edge_pairs) {
+                              const MotionBounds& bounds, double thickness, bool edge_pairs,
+                              bool keep_states) {
   const Vec3Array& lo = bounds.lo;
   const Vec3Array& hi = bounds.hi;
-  // Edge-edge pairs first, vertex-triangle pairs after them: a repeated broad phase within the
-  // step replaces only the latter, and keeps the old ones aside to hand their states on.
-  if (!edge_pairs) previous_.assign(pairs_.begin() + edge_pair_count_, pairs_.end());
+  // Edge-edge pairs first, vertex-triangle pairs after them: a search that renews only the latter
+  // keeps the edge pairs. The pairs it replaces go aside to hand their states on.
+  previous_edge_count_ = 0;
+  previous_.clear();
+  if (keep_states) {
+    previous_.assign(pairs_.begin() + (edge_pairs ? 0 : edge_pair_count_), pairs_.end());
+    if (edge_pairs) previous_edge_count_ = edge_pair_count_;
+  }
   pairs_.resize(edge_pairs ? 0 : edge_pair_count_);
   if (edge_pairs) edge_pair_count_ = 0;
   vertex_found_.clear();
+  edge_found_.clear();
   const int triangles = topology.triangleCount();
   if (triangles == 0) return;
   // Vertex boxes grown by h / 2: two boxes built from them overlap when within h of each other.
@@ -307,30 +326,46 @@ void SelfCollision::findPairs(const Particles& p, const ClothTopology& topology,
   tree_.forEachLeafPair(tree_.cosFlat(thickness), [&](int a, int b) {
     findLeafPairs(a, b, p, topology, bounds, thickness, edge_pairs);
   });
-  if (edge_pairs) edge_pair_count_ = static_cast<int>(pairs_.size());
-  // By vertex (counting sort; a vertex's pairs in the order the traversal found them): the order
-  // carryVertexTriangleStates bisects.
-  std::fill(vertex_slot_.begin(), vertex_slot_.end(), 0);
-  for (const SelfContactPair& pair : vertex_found_) ++vertex_slot_[pair.index[0] + 1];
-  for (int v = 0; v < vertices; ++v) vertex_slot_[v + 1] += vertex_slot_[v];
-  const std::size_t start = pairs_.size();
-  pairs_.resize(start + vertex_found_.size());
-  for (const SelfContactPair& pair : vertex_found_) {
-    pairs_[start + static_cast<std::size_t>(vertex_slot_[pair.index[0]]++)] = pair;
+  // Each kind by its first particle (counting sort; a particle's pairs in the order the traversal
+  // found them): the order carryStates bisects.
+  if (edge_pairs) {
+    appendByFirstParticle(edge_found_, vertices);
+    edge_pair_count_ = static_cast<int>(pairs_.size());
   }
-  vertex_found_.clear();
-  if (!edge_pairs) carryVertexTriangleStates();
+  appendByFirstParticle(vertex_found_, vertices);
+  if (keep_states) {
+    const auto previous_vertex = previous_.begin() + previous_edge_count_;
+    if (edge_pairs) {
+      carryStates(pairs_.begin(), pairs_.begin() + edge_pair_count_, previous_.begin(),
+                  previous_vertex);
+    }
+    carryStates(pairs_.begin() + edge_pair_count_, pairs_.end(), previous_vertex, previous_.end());
+  }
 }
 
-// A vertex-triangle contact found again within the step keeps its side (frozen while the vertex is
-// over the triangle, where the step-start side a new pair gets may no longer be the one it is
-// held to) and its contact state. Both lists are ordered by vertex (the query loop): the old pairs
-// of each new pair's vertex are a short range found by bisection.
-void SelfCollision::carryVertexTriangleStates() {
-  const auto by_vertex = [](const SelfContactPair& pair, int v) { return pair.index[0] < v; };
-  for (auto pair = pairs_.begin() + edge_pair_count_; pair != pairs_.end(); ++pair) {
-    auto old = std::lower_bound(previous_.begin(), previous_.end(), pair->index[0], by_vertex);
-    for (; old != previous_.end() && old->index[0] == pair->index[0]; ++old) {
+void SelfCollision::appendByFirstParticle(std::vector<SelfContactPair>& found, int particles) {
+  std::fill(vertex_slot_.begin(), vertex_slot_.end(), 0);
+  for (const SelfContactPair& pair : found) ++vertex_slot_[pair.index[0] + 1];
+  for (int v = 0; v < particles; ++v) vertex_slot_[v + 1] += vertex_slot_[v];
+  const std::size_t start = pairs_.size();
+  pairs_.resize(start + found.size());
+  for (const SelfContactPair& pair : found) {
+    pairs_[start + static_cast<std::size_t>(vertex_slot_[pair.index[0]]++)] = pair;
+  }
+  found.clear();
+}
+
+// A contact found again within the step keeps its side (frozen while the vertex is over the
+// triangle, or the edges face each other within the band, where the step-start side a new pair
+// gets may no longer be the one it is held to) and its contact state. Both ranges are of one kind
+// and ordered by first particle: the old pairs of each new pair's particle are a short range
+// found by bisection.
+void SelfCollision::carryStates(PairIterator begin, PairIterator end, PairIterator old_begin,
+                                PairIterator old_end) {
+  const auto by_first = [](const SelfContactPair& pair, int v) { return pair.index[0] < v; };
+  for (auto pair = begin; pair != end; ++pair) {
+    auto old = std::lower_bound(old_begin, old_end, pair->index[0], by_first);
+    for (; old != old_end && old->index[0] == pair->index[0]; ++old) {
       if (std::equal(old->index + 1, old->index + 4, pair->index + 1)) {
         pair->side = old->side;
         pair->state = old->state;
@@ -449,7 +484,7 @@ void SelfCollision::addEdgeEdge(int e, int f, const Particles& p, const ClothTop
   if (geometry(pair, p.step_start, start) && start.distance != 0.0) {
     pair.side = start.distance > 0.0 ? 1.0 : -1.0;
   }
-  pairs_.push_back(pair);
+  edge_found_.push_back(pair);
 }
 
 void SelfCollision::preStabilize(Particles& p, double thickness, double max_shift,
@@ -495,7 +530,11 @@ double SelfCollision::project(Particles& p, double thickness, int substep,
       // or farther than the band: either way the side follows the start (below), which needs
       // only the sign, not the closest points.
       double side = 0.0;
-      if (pair.edge_edge && edgesApart(pair, p.substep_start, kEdgeBand * thickness)) {
+      const double band = kEdgeBand * thickness;
+      const bool apart = pair.edge_edge ? edgesApart(pair, p.substep_start, band)
+                                        : vertexApart(pair, p.substep_start, band);
+      far_pair_substeps_ += apart;
+      if (pair.edge_edge && apart) {
         if (!edgeSide(pair, p.substep_start, side)) {
           pair.side = 0.0;
         } else if (side != 0.0) {

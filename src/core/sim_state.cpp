@@ -115,17 +115,19 @@ class ByteReader {
     for (Vec3& v : values) v = vec(what);
     return values;
   }
-  bool header(const char (&magic)[8], std::uint32_t version, const char* kind) {
+  // The version found (after header()).
+  std::uint32_t version() const { return version_; }
+  bool header(const char (&magic)[8], const char* kind) {
     if (size_ < sizeof(magic) || std::memcmp(data_, magic, sizeof(magic)) != 0) {
       fail(std::string("not a ") + kind + " (no '" + std::string(magic, sizeof(magic)) +
            "' header)");
       return false;
     }
     offset_ = sizeof(magic);
-    const std::uint32_t found = raw<std::uint32_t>("version");
-    if (ok() && found != version) {
-      fail(std::string(kind) + " version " + std::to_string(found) + ", this build reads " +
-           std::to_string(version));
+    version_ = raw<std::uint32_t>("version");
+    if (ok() && (version_ < kOldestStateFileVersion || version_ > kStateFileVersion)) {
+      fail(std::string(kind) + " version " + std::to_string(version_) + ", this build reads " +
+           std::to_string(kOldestStateFileVersion) + " to " + std::to_string(kStateFileVersion));
     }
     return ok();
   }
@@ -140,6 +142,7 @@ class ByteReader {
   const std::uint8_t* data_;
   std::size_t size_;
   std::size_t offset_ = 0;
+  std::uint32_t version_ = 0;
   std::string error_;
 };
 
@@ -176,6 +179,7 @@ void writeSolverPart(ByteWriter& w, const SimulationState& state) {
     w.raw(c.distance);
     w.vec(c.point);
   }
+  w.index(state.search_window);
 }
 
 void readSolverPart(ByteReader& r, SimulationState& state) {
@@ -188,6 +192,7 @@ void readSolverPart(ByteReader& r, SimulationState& state) {
     c.distance = r.raw<double>("mesh contact distance");
     c.point = r.vec("mesh contact point");
   }
+  if (r.version() >= 2) state.search_window = r.index("search_window");
 }
 
 std::vector<std::uint8_t> encodeState(const SimulationState& state) {
@@ -222,7 +227,7 @@ bool decodeState(const std::uint8_t* data, std::size_t size, SimulationState& st
                  std::string& reason) {
   ByteReader r(data, size);
   SimulationState read;
-  if (r.header(kStateMagic, kStateFileVersion, "pbd_cloth state file")) {
+  if (r.header(kStateMagic, "pbd_cloth state file")) {
     read.time = r.raw<double>("time");
     read.position = r.vecs("positions");
     read.velocity = r.vecs("velocities");
@@ -308,7 +313,7 @@ bool decodeSolverData(const std::vector<std::uint8_t>& data, SimulationState& st
                       std::string& reason) {
   ByteReader r(data.data(), data.size());
   SimulationState read;
-  if (r.header(kSolverDataMagic, kStateFileVersion, "pbd_cloth solver_data")) {
+  if (r.header(kSolverDataMagic, "pbd_cloth solver_data")) {
     readSolverPart(r, read);
     r.atEnd();
   }
@@ -318,6 +323,7 @@ bool decodeSolverData(const std::vector<std::uint8_t>& data, SimulationState& st
   }
   state.substep_start = std::move(read.substep_start);
   state.mesh_contacts = std::move(read.mesh_contacts);
+  state.search_window = read.search_window;
   return true;
 }
 

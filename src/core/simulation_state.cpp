@@ -90,6 +90,7 @@ void Simulation::getState(SimulationState& state) const {
     to.enabled = links_[l].enabled;
   }
   collisions_.getMeshContacts(state.mesh_contacts);
+  state.search_window = collisions_.adaptiveSearchWindow();
 }
 
 std::string Simulation::checkState(const SimulationState& state) const {
@@ -153,6 +154,10 @@ std::string Simulation::checkState(const SimulationState& state) const {
   for (std::size_t l = 0; error.empty() && l < state.robot_links.size(); ++l) {
     error = checkBody(at("robot_links", l), state.robot_links[l], scene_.robot.model.links[l].name);
   }
+  if (error.empty() && (state.search_window < 0 || state.search_window > kMaxPasses)) {
+    error = "search_window: " + std::to_string(state.search_window) + " is not in [0, " +
+            std::to_string(kMaxPasses) + "] substeps";
+  }
   for (std::size_t c = 0; error.empty() && c < state.mesh_contacts.size(); ++c) {
     const MeshContactCache& cache = state.mesh_contacts[c];
     const std::string field = at("mesh_contacts", c);
@@ -206,6 +211,7 @@ bool Simulation::setState(const SimulationState& state, std::string& reason) {
     links_[l].enabled = from.enabled;
   }
   collisions_.setMeshContacts(state.mesh_contacts);
+  collisions_.setAdaptiveSearchWindow(state.search_window);
   kinematicSetChanged();  // tethers of the restored grasps
   collisions_.findCandidatesNow(particles_, topology_);
   StepStats& stats = solver_.mutableStats();

@@ -883,6 +883,7 @@ void Solver::step(double dt, Particles& p, const ClothTopology& topology, Collis
   // Collisions::project searches again in a substep whose prediction left the swept boxes.
   auto t0 = Clock::now();
   collisions.setWorkerPool(pool_.threads() > 1 ? &pool_ : nullptr);
+  collisions.setSearchWindow(config_.search_window, substeps);
   collisions.beginStep(p, topology, dt);
   auto t1 = Clock::now();
   stats_.collide_time += seconds(t0, t1);

@@ -223,7 +223,7 @@ void readSolver(const YAML::Node& node, SolverConfig& s) {
                                        "levels",           "levels_interpolate",
                                        "max_speed",        "simd",
                                        "threads",          "sleep_speed",
-                                       "sleep_time"});
+                                       "sleep_time",       "search_window"});
   if (map.has("method")) {
     s.method = toWord(map.get("method"), map.keyOf("method"),
                       {Method::kXpbd, Method::kPbd, Method::kVerlet, Method::kMassSpring});
@@ -251,6 +251,7 @@ void readSolver(const YAML::Node& node, SolverConfig& s) {
   map.read("threads", s.threads);
   map.read("sleep_speed", s.sleep_speed);
   map.read("sleep_time", s.sleep_time);
+  map.read("search_window", s.search_window);
 }
 
 void readCloth(const YAML::Node& node, ClothConfig& c) {

@@ -27,7 +27,8 @@ const char kUsage[] =
     "one line of key=value metrics on stdout (wall_ms_per_step max_strain mean_strain\n"
     "max_penetration self_intersections energy finite steps sim_time iterations_per_step\n"
     "predict_ms collide_ms project_ms update_ms contact_ms broad_phase_runs\n"
-    "vertex_triangle_pairs edge_edge_pairs (self-collision candidates per step) method substeps\n"
+    "vertex_triangle_pairs edge_edge_pairs (self-collision candidates per step) search_window\n"
+    "(substeps per contact search, mean over the steps) method substeps\n"
     "iterations ...).\n"
     "Only the step calls are timed (cpu_ms_per_step: their processor time, which leaves out\n"
     "waiting for a core on a shared machine). max_strain, max_penetration and "
@@ -177,6 +178,7 @@ struct BenchResult {
   double broad_phase_runs = 0.0;  // per step: 1, plus re-runs for particles that left their boxes
   // Self-collision candidates per step (the last broad phase of each step), mean over the run.
   double vertex_triangle_pairs = 0.0, edge_edge_pairs = 0.0;
+  double search_window = 0.0;  // substeps per contact search, mean over the steps
   int particles = 0;
   int sample_every = 1;
   double depth_ms = -1.0;  // --depth: mean time to render one image; < 0: not asked
@@ -272,6 +274,7 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
   double predict = 0.0, collide = 0.0, project = 0.0, update = 0.0, contact = 0.0;
   long long broad_phase_runs = 0;
   long long vertex_triangle_pairs = 0, edge_edge_pairs = 0;
+  long long search_window = 0;
   long long iterations = 0;
   long long done = 0;
   double asleep_seconds = 0.0, awake_seconds = 0.0;
@@ -302,6 +305,7 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
     broad_phase_runs += sim.collisions().stats().broad_phase_runs;
     vertex_triangle_pairs += sim.collisions().stats().vertex_triangle_pairs;
     edge_edge_pairs += sim.collisions().stats().edge_edge_pairs;
+    search_window += sim.collisions().stats().search_window;
     iterations += stats.iterations;
     if (done % result.sample_every != 0 && done != steps) continue;
     last = sim.computeMetrics();
@@ -343,6 +347,7 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
   result.broad_phase_runs = static_cast<double>(broad_phase_runs) * per_step;
   result.vertex_triangle_pairs = static_cast<double>(vertex_triangle_pairs) * per_step;
   result.edge_edge_pairs = static_cast<double>(edge_edge_pairs) * per_step;
+  result.search_window = static_cast<double>(search_window) * per_step;
   return result;
 }
 
@@ -356,7 +361,7 @@ void printResult(const pbd_cloth::SceneConfig& scene, const BenchResult& r) {
       "sample_every=%d final_max_strain=%.9g ordering=%s contact_ms=%.6g broad_phase_runs=%.6g "
       "final_structural_max_strain=%.9g final_structural_mean_strain=%.9g cpu_ms_per_step=%.6g "
       "asleep_steps=%lld asleep_ms_per_step=%.6g awake_ms_per_step=%.6g "
-      "vertex_triangle_pairs=%.6g edge_edge_pairs=%.6g",
+      "vertex_triangle_pairs=%.6g edge_edge_pairs=%.6g search_window=%.6g",
       r.wall_ms_per_step, r.max_strain, last.mean_strain, r.max_penetration,
       last.self_intersections, last.energy, last.finite ? 1 : 0, r.steps, r.sim_time,
       r.iterations_per_step, r.predict_ms, r.collide_ms, r.project_ms, r.update_ms,
@@ -364,7 +369,8 @@ void printResult(const pbd_cloth::SceneConfig& scene, const BenchResult& r) {
       r.particles, r.max_self_intersections, r.sample_every, last.max_strain,
       pbd_cloth::toString(scene.solver.ordering), r.contact_ms, r.broad_phase_runs,
       last.structural_max_strain, last.structural_mean_strain, r.cpu_ms_per_step, r.asleep_steps,
-      r.asleep_ms_per_step, r.awake_ms_per_step, r.vertex_triangle_pairs, r.edge_edge_pairs);
+      r.asleep_ms_per_step, r.awake_ms_per_step, r.vertex_triangle_pairs, r.edge_edge_pairs,
+      r.search_window);
   if (r.depth_ms >= 0.0) std::printf(" depth_ms=%.6g", r.depth_ms);
   std::printf("\n");
 }

@@ -409,6 +409,8 @@ INSTANTIATE_TEST_SUITE_P(
         BadValue{"cloth.shear_diagonals=3", "cloth.shear_diagonals", "[1, 2]"},
         BadValue{"solver.levels=17", "solver.levels", "[0, 16]"},
         BadValue{"solver.levels=-1", "solver.levels", "[0, 16]"},
+        BadValue{"solver.search_window=-1", "solver.search_window", "[0, 1000]"},
+        BadValue{"solver.search_window=1.5", "solver.search_window", "integer"},
         BadValue{"cloth.shear_diagonals=0", "cloth.shear_diagonals", "[1, 2]"},
         BadValue{"granular.count=-1", "granular.count", "[0, 1000000]"},
         BadValue{"granular.radius=0", "granular.radius", "> 0"},

@@ -149,6 +149,19 @@ TEST(SimState, DrapeWithLiveGripperAndMovingObstacleContinuesBitForBit) {
   EXPECT_TRUE(saved.grippers[0].live);
 }
 
+// The drape at 64 x 64 (the scaling benchmark's settings), saved while the adaptive contact
+// search window (collisions.h) is shorter than the step: the window is carried with the state.
+TEST(SimState, DrapeWithAShortSearchWindowContinuesBitForBit) {
+  const int n = 64;
+  const double spacing = 0.93 / (n - 1);
+  SceneConfig scene = shippedScene(
+      "drape.yaml", {"cloth.rows=64", "cloth.cols=64", "cloth.spacing=" + std::to_string(spacing),
+                     "cloth.thickness=" + std::to_string(spacing / 6.0)});
+  const SimulationState saved = expectContinuesBitForBit(scene, 24, 30);
+  EXPECT_GE(saved.search_window, 1);
+  EXPECT_LT(saved.search_window, scene.solver.substeps);
+}
+
 // Granular particles poured on a hanging cloth: particle-particle contacts with friction.
 TEST(SimState, GranularPileContinuesBitForBit) {
   const SceneConfig scene =
@@ -265,6 +278,9 @@ TEST_F(SimStateRefusal, BodiesOfAnotherScene) {
   bad.robot_links.push_back(BodySnapshot());
   expectRefused(bad, "robot_links: 1 given, the scene has 0");
   bad = good_;
+  bad.search_window = -1;
+  expectRefused(bad, "search_window: -1 is not in [0, 1000] substeps");
+  bad = good_;
   bad.mesh_contacts.push_back(MeshContactCache());
   expectRefused(bad, "mesh_contacts[0].collider: 0 is not a mesh collider");
 }
@@ -291,7 +307,16 @@ TEST(SimStateFile, BadFilesAreRefusedWithTheReason) {
   newer[8] = static_cast<char>(kStateFileVersion + 1);
   std::istringstream future(newer);
   EXPECT_FALSE(readState(future, read, reason));
-  EXPECT_NE(reason.find("version 2"), std::string::npos) << reason;
+  EXPECT_NE(reason.find("version " + std::to_string(kStateFileVersion + 1)), std::string::npos)
+      << reason;
+
+  // Version 1 had no search window (the last 4 bytes): it still reads, with none chosen.
+  std::string first = bytes.substr(0, bytes.size() - 4);
+  first[8] = 1;
+  std::istringstream old_file(first);
+  ASSERT_TRUE(readState(old_file, read, reason)) << reason;
+  EXPECT_EQ(read.search_window, 0);
+  EXPECT_TRUE(sameBits(read.position, state.position));
 
   std::istringstream trailing(bytes + "x");
   EXPECT_FALSE(readState(trailing, read, reason));
@@ -305,12 +330,14 @@ TEST(SimStateFile, SolverDataRoundTripsAndEmptyMeansPositions) {
   SimulationState state;
   state.substep_start = {Vec3(1.0 / 3.0, -0.0, 1e-300)};
   state.mesh_contacts = {{4, 2, 17, 0.125, Vec3(0.1, 0.2, 0.3)}};
+  state.search_window = 3;
   SimulationState read;
   std::string reason;
   ASSERT_TRUE(decodeSolverData(encodeSolverData(state), read, reason)) << reason;
   EXPECT_TRUE(sameBits(read.substep_start, state.substep_start));
   ASSERT_EQ(read.mesh_contacts.size(), 1u);
   EXPECT_EQ(read.mesh_contacts[0].triangle, 17);
+  EXPECT_EQ(read.search_window, 3);
   EXPECT_FALSE(decodeSolverData({1, 2, 3}, read, reason));
   EXPECT_NE(reason.find("solver_data"), std::string::npos) << reason;
 }
