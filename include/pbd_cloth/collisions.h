@@ -27,30 +27,34 @@
 //   fast it moves, and a particle of any speed never passes a plate of any thickness. (Contact is
 //   per particle: an obstacle thinner than the gap between two cloth particles can slip between
 //   them.)
-// - Particles and cloth: the broad phase bounds each particle's motion over the step by its swept
-//   box (step-start position to the unconstrained prediction x + v dt + g dt^2, grown by half its
-//   radius) and, for self-collision, by its reference path (a straight line to its free flight at
-//   the step end, left by at most the same half radius), which lets the search drop pairs that
-//   stay apart however the boxes overlap (SelfCollision::findPairs). After each substep's
-//   prediction the particles are checked against both; if one left its box or path the
-//   particle-particle and vertex-triangle candidates are searched again for the rest of the step
-//   (edge-edge candidates, a safety net behind vertex-triangle, stay those of the step start). A
-//   contact found again keeps its state (friction window, its base point and the depth resolved
-//   in it; a self-contact's side), so the search changes nothing for it. Self-contacts keep each
-//   vertex (edge) on the side of the triangle (edge) it was on, so a vertex pushed through a cloth
-//   layer is pulled back, never out of the far side.
-// - The search window: a search covers the next few substeps, not always the rest of the step.
-//   Its boxes and paths reach to the window's end, and the window's first substep searches again
-//   (edge-edge pairs too). Long windows search less often; short ones list fewer pairs, since a
-//   pair is listed when the window's motion can bring it within reach: where neighbours move
-//   apart fast (a corner whipping round a ball) the candidates grow with the window's length
-//   squared. solver.search_window fixes the window; 0, the default, chooses it per step
-//   (Collisions::endStep): a search costs about a pass over the particles (the tree's refit and
-//   traversal), a candidate a projection in every substep of its window, so after a step whose
-//   candidates, summed over its substeps, outnumbered the particles times its searches, the
-//   window halves, and where they came to less than a quarter of that, it doubles, up to the whole
-//   step. A cloth moving as a whole keeps the whole step (fabric_table: about 0 candidates);
-//   the drape at 128 x 128 settles at a few substeps.
+// - Particles and cloth: the broad phase bounds each particle's motion over the search window
+//   (below; at most the step) by its swept box (its position to the unconstrained prediction
+//   x + v T + g T^2 at the window's end, grown by half its radius) and, for self-collision, by
+//   its reference path (a straight line to its free flight at the window's end, left by at most
+//   the same half radius), which lets the search drop pairs that stay apart however the boxes
+//   overlap (SelfCollision::findPairs). After each substep's prediction the particles are checked
+//   against both; if one left its box or path the particle-particle and vertex-triangle
+//   candidates are searched again for the rest of the window (edge-edge candidates, a safety net
+//   behind vertex-triangle, stay those of the window's start). A contact found again keeps its
+//   state (friction window, its base point and the depth resolved in it; a self-contact's side),
+//   so the search changes nothing for it. Self-contacts keep each vertex (edge) on the side of
+//   the triangle (edge) it was on, so a vertex pushed through a cloth layer is pulled back, never
+//   out of the far side.
+// - The search window: a search covers the next few substeps, not always the whole step, and
+//   the first substep of each window searches again (edge-edge pairs too). Long windows search
+//   less often; short ones list fewer pairs, since a pair is listed when the window's motion can
+//   bring it within reach: where neighbours move apart fast (a corner whipping round a ball) the
+//   candidates grow with the window's length squared. solver.search_window fixes the window; 0,
+//   the default, chooses it per step (Collisions::endStep). A search costs about a pass over the
+//   particles (the tree's refit and traversal); a far candidate (its boxes more than a few
+//   thicknesses apart at a substep's start, SelfCollision::takeFarPairSubsteps), listed for the
+//   window's motion and not for its nearness, costs a check in every substep of its window. So
+//   after a step whose far candidates, summed over its substeps, came to more than
+//   kWindowHalves times the particles times its searches, the window halves; below
+//   kWindowDoubles times that, it doubles, up to the whole step. Near candidates do not count:
+//   layers lying on each other list them whatever the window. A cloth moving as a whole keeps
+//   the whole step (fabric_table: no far candidate); the drape at 64 x 64 goes down to 2
+//   substeps after its corners meet the ball.
 // - Initial overlaps: at each step start, pre-stabilisation separates contacts overlapping by more
 //   than a slop by at most max_separation_speed * dt, on positions before the prediction, so the
 //   separation adds no velocity (Macklin et al. 2014, sec. 4.4). What remains is only kept from
