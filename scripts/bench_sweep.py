@@ -187,6 +187,16 @@ SWINGING_VARIANTS = {
     # velocity update in halves; bit-identical to one thread.
     'xpbd + levels, 2 threads': (['solver.levels=5', 'solver.threads=2'],
                                  {'variant': 'levels_2_threads'}, substeps_only([40, 60, 80])),
+    # One diagonal per cell (cloth.shear_diagonals=1, the grid's default link set): the peers'
+    # figures on these links (issue 12's thread: Bender's PBD 160 x 1, Bullet 16 x 10) compare
+    # with these, the two-diagonal ones above with the issue's own.
+    'xpbd + levels, one diagonal': (['solver.levels=5', 'cloth.shear_diagonals=1'],
+                                    {'variant': 'levels_one_diagonal'},
+                                    substeps_only([40, 50, 60, 80])),
+    'xpbd, one diagonal': (['cloth.shear_diagonals=1'], {'variant': 'one_diagonal'},
+                           substeps_only([80, 160, 320])),
+    'bullet, one diagonal': (['cloth.shear_diagonals=1'], {'variant': 'bullet_one_diagonal'},
+                             substeps_only([32, 128]) + [(16, 10)]),
 }
 
 
@@ -239,9 +249,9 @@ def swinging100_runs(quick):
         plan = [('xpbd + levels', levels, substeps_only([10])),
                 ('bullet', [], substeps_only([5]))]
     else:
-        plan = [('xpbd + levels', levels, substeps_only([40, 60, 80, 120, 160])),
+        plan = [('xpbd + levels', levels, substeps_only([40, 60, 80, 120, 140, 160])),
                 ('xpbd + levels, 2 threads', levels + ['solver.threads=2'],
-                 substeps_only([60, 80, 120])),
+                 substeps_only([60, 80, 120, 140])),
                 ('xpbd', [], substeps_only([80, 160, 320])),
                 ('bullet', [], substeps_only([64, 128, 256]) + [(16, 10)])]
     runs = [pbd_run('swinging100', 'swinging.yaml', 'start', 'xpbd', 1, 1, 0.0, grid,

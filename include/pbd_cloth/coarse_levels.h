@@ -39,8 +39,9 @@ class CoarseLevels {
   // Before a step's sweeps: the links' inverse masses (the kinematic set is fixed for a step).
   void prepareStep(const Particles& p);
   // One sweep over the coarse levels, coarsest first, on the cloth particles (kinematic particles
-  // do not move). Returns the largest correction of a coarse link. simd: solver.simd.
-  double project(Particles& p, bool interpolate, bool simd = true);
+  // do not move). Returns the largest correction of a coarse link (0 without track_change: only
+  // solver.tolerance reads it). simd: solver.simd.
+  double project(Particles& p, bool interpolate, bool simd = true, bool track_change = true);
 
  private:
   struct Link {

@@ -98,6 +98,10 @@ struct StretchProjection {
   double stiffness = 1.0;  // k
   bool unilateral = false;
   bool simd = true;  // false: the portable loop even where AVX2 is there (tests, benchmarks)
+  // Whether the pass measures its largest correction (StretchPassResult::max_change), which only
+  // solver.tolerance reads: without it the pass leaves out a multiplication and two maxima per
+  // link, and max_change stays 0.
+  bool track_change = true;
 };
 
 struct StretchPassResult {

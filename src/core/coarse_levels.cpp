@@ -159,7 +159,7 @@ void CoarseLevels::prepareStep(const Particles& p) {
   }
 }
 
-double CoarseLevels::project(Particles& p, bool interpolate, bool simd) {
+double CoarseLevels::project(Particles& p, bool interpolate, bool simd, bool track_change) {
   if (levels_.empty()) return 0.0;
   if (interpolate) {
     for (int i : levels_.front().particles) start_[i] = p.position[i];
@@ -184,6 +184,7 @@ double CoarseLevels::project(Particles& p, bool interpolate, bool simd) {
       StretchProjection how;
       how.unilateral = true;
       how.simd = simd;
+      how.track_change = track_change;
       max_change = std::max(max_change, projectStretchLinks(level.flat, 0, level.flat.batchCount(),
                                                             how, packed, nullptr)
                                             .max_change);

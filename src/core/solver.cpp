@@ -325,6 +325,8 @@ double Solver::projectStretch(double h, Particles& p, const ClothTopology& topol
     how.alpha = alpha;
     how.stiffness = k;
     how.simd = config_.simd;
+    // The largest correction is read only by solver.tolerance (adaptive pass counts).
+    how.track_change = config_.tolerance > 0.0;
     double* x = p.position.front().data();
     StretchPassResult result;
     const int threads = pool_.threads();
@@ -677,7 +679,8 @@ double Solver::projectPass(double h, Particles& p, const ClothTopology& topology
   // compliant (they are inextensible); the explicit springs do not come here.
   double max_change = 0.0;
   if (coarse_.levelCount() > 0 && stretch_compliance_ == 0.0) {
-    max_change = coarse_.project(p, config_.levels_interpolate, config_.simd);
+    max_change =
+        coarse_.project(p, config_.levels_interpolate, config_.simd, config_.tolerance > 0.0);
   }
   max_change = std::max(max_change, projectStretch(h, p, topology));
   max_change = std::max(max_change, projectBend(h, p, topology, first_pass));

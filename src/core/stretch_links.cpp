@@ -50,7 +50,9 @@ inline void projectOne(int c, const StretchLinks& links, const StretchProjection
   xb[0] -= fb * dx;
   xb[1] -= fb * dy;
   xb[2] -= fb * dz;
-  result.max_change = std::max(result.max_change, std::abs(dlambda) * std::max(wi, wj));
+  if (how.track_change) {
+    result.max_change = std::max(result.max_change, std::abs(dlambda) * std::max(wi, wj));
+  }
 }
 
 void projectPortable(const StretchLinks& links, int first_batch, int end_batch,
@@ -151,8 +153,10 @@ PBD_AVX2 inline bool projectFour(int c, const StretchLinks& links, const Stretch
     b[k] = _mm256_sub_pd(b[k], _mm256_mul_pd(fb, d[k]));
   }
   // A skipped link (no free end) has inverse_denominator 0: dlambda 0, nothing moves.
-  const __m256d magnitude = _mm256_andnot_pd(_mm256_set1_pd(-0.0), dlambda);
-  max_change = _mm256_max_pd(max_change, _mm256_mul_pd(magnitude, _mm256_max_pd(wi, wj)));
+  if (how.track_change) {
+    const __m256d magnitude = _mm256_andnot_pd(_mm256_set1_pd(-0.0), dlambda);
+    max_change = _mm256_max_pd(max_change, _mm256_mul_pd(magnitude, _mm256_max_pd(wi, wj)));
+  }
   return true;
 }
 
