@@ -283,7 +283,15 @@ TEST(Gripper, KeepsUpWithAFrameBroadcastAboutOnceAStep) {
               worst, checked);
   EXPECT_GE(checked, 10);
   // One 10 ms sample period of motion is 2 mm; allow a step or two more and the machine's jitter.
-  EXPECT_LT(worst, 0.015) << "the gripper lags its frame by up to " << worst << " m";
+  // Built with AddressSanitizer (scripts/run_sanitizers) the node, the broadcaster and tf run
+  // several times slower, and samples arrive later: 15.3 mm there on a fresh clone's CI run
+  // (2026-11-26), 6-9 mm in the normal build, which keeps the bound this test is for.
+#if defined(__SANITIZE_ADDRESS__)
+  constexpr double kLagBound = 0.03;
+#else
+  constexpr double kLagBound = 0.015;
+#endif
+  EXPECT_LT(worst, kLagBound) << "the gripper lags its frame by up to " << worst << " m";
 }
 
 TEST(Gripper, GraspByNameGraspsAndReleases) {
