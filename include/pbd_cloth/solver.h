@@ -81,6 +81,9 @@ class Solver {
   double pbdStiffness(double k) const;
   double stretchAlpha(double h) const;
   double dampingFactor(double h) const;
+  // Whether a pass measures its largest correction: only solver.tolerance (adaptive pass counts)
+  // reads it, so without a tolerance the links, levels and hinges leave it out.
+  bool tracksLargestChange() const { return config_.tolerance > 0.0; }
   void countJacobiConstraints(const Particles& p, const ClothTopology& topology);
   void startReactions(const Particles& p, const ClothTopology& topology, bool list);
   void addMultiplierReactions(const Particles& p, const ClothTopology& topology);

@@ -325,8 +325,7 @@ double Solver::projectStretch(double h, Particles& p, const ClothTopology& topol
     how.alpha = alpha;
     how.stiffness = k;
     how.simd = config_.simd;
-    // The largest correction is read only by solver.tolerance (adaptive pass counts).
-    how.track_change = config_.tolerance > 0.0;
+    how.track_change = tracksLargestChange();
     double* x = p.position.front().data();
     StretchPassResult result;
     const int threads = pool_.threads();
@@ -446,7 +445,7 @@ double Solver::projectBend(double h, Particles& p, const ClothTopology& topology
 double Solver::projectFlatBend(Particles& p, const ClothTopology& topology, bool first_pass) {
   if (topology.bend.empty()) return 0.0;  // (and no multipliers to point at)
   double* x = p.position.front().data();
-  const bool track_change = config_.tolerance > 0.0;
+  const bool track_change = tracksLargestChange();
   // Hinges [begin, end) in order.
   auto sweep = [&](int begin, int end) {
     return projectFlatHinges(flat_hinges_.data() + begin, end - begin, first_pass, track_change,
@@ -680,7 +679,7 @@ double Solver::projectPass(double h, Particles& p, const ClothTopology& topology
   double max_change = 0.0;
   if (coarse_.levelCount() > 0 && stretch_compliance_ == 0.0) {
     max_change =
-        coarse_.project(p, config_.levels_interpolate, config_.simd, config_.tolerance > 0.0);
+        coarse_.project(p, config_.levels_interpolate, config_.simd, tracksLargestChange());
   }
   max_change = std::max(max_change, projectStretch(h, p, topology));
   max_change = std::max(max_change, projectBend(h, p, topology, first_pass));
@@ -921,7 +920,7 @@ void Solver::step(double dt, Particles& p, const ClothTopology& topology, Collis
       ++stats_.iterations;
       const double max_change = projectPass(h, p, topology, collisions, pass == 0);
       // Adaptive count (seed: "measuring the change from last iteration").
-      if (config_.tolerance > 0.0 && max_change < config_.tolerance) break;
+      if (tracksLargestChange() && max_change < config_.tolerance) break;
     }
     addMultiplierReactions(p, topology);
     const auto t2 = Clock::now();
