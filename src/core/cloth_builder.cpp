@@ -475,11 +475,74 @@ void buildBending(const Vec3Array& rest, ClothTopology& topology) {
   }
 }
 
+namespace {
+
+// Anchors joined by stretch links (the patch of cloth one gripper holds, a pinned edge) form a
+// group. Returns each cloth particle's group, 0 .. groups - 1, or -1 for a free particle.
+std::vector<int> anchorGroups(const Particles& particles, const ClothTopology& topology,
+                              int& groups) {
+  const int n = particles.cloth_count;
+  std::vector<int> parent(n);
+  for (int i = 0; i < n; ++i) parent[i] = i;
+  auto root = [&](int i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  for (const DistanceConstraint& c : topology.stretch) {
+    if (particles.isKinematic(c.i) && particles.isKinematic(c.j)) parent[root(c.i)] = root(c.j);
+  }
+  std::vector<int> group(n, -1), group_of_root(n, -1);
+  groups = 0;
+  for (int i = 0; i < n; ++i) {
+    if (!particles.isKinematic(i)) continue;
+    int& g = group_of_root[root(i)];
+    if (g < 0) g = groups++;
+    group[i] = g;
+  }
+  return group;
+}
+
+// Of each particle's tethers (grouped by particle), keeps the shortest to each group of anchors,
+// in their order. The others add little: their anchors move with the nearest one (one gripper, a
+// fixed edge), and the cloth's own links hold the particle's place relative to them. But every
+// tether is a projection per pass: a gripper holding 6 particles gave every particle 6, and a
+// pinned edge of 50 particles 50 (README, "Choosing a method").
+void keepNearestOfEachGroup(const Particles& particles, const ClothTopology& topology,
+                            std::vector<Tether>& tethers) {
+  int groups = 0;
+  const std::vector<int> group = anchorGroups(particles, topology, groups);
+  std::vector<int> best(groups, -1);  // per group, the kept tether of the current particle
+  std::vector<int> touched;
+  std::size_t kept = 0, end = 0;
+  for (std::size_t begin = 0; begin < tethers.size(); begin = end) {
+    end = begin + 1;
+    while (end < tethers.size() && tethers[end].particle == tethers[begin].particle) ++end;
+    touched.clear();
+    for (std::size_t t = begin; t < end; ++t) {
+      int& b = best[group[tethers[t].anchor]];
+      if (b < 0) {
+        touched.push_back(group[tethers[t].anchor]);
+        b = static_cast<int>(t);
+      } else if (tethers[t].max_length < tethers[b].max_length) {
+        b = static_cast<int>(t);
+      }
+    }
+    for (std::size_t t = begin; t < end; ++t) {
+      if (best[group[tethers[t].anchor]] == static_cast<int>(t)) tethers[kept++] = tethers[t];
+    }
+    for (int g : touched) best[g] = -1;
+  }
+  tethers.resize(kept);
+}
+
+}  // namespace
+
 void buildTethers(const Particles& particles, const ClothTopology& topology, double spacing,
                   std::vector<Tether>& tethers) {
   tethers.clear();
   if (topology.from_mesh) {
     buildMeshTethers(particles, topology, tethers);
+    keepNearestOfEachGroup(particles, topology, tethers);
     return;
   }
   std::vector<int> anchors;
@@ -495,6 +558,7 @@ void buildTethers(const Particles& particles, const ClothTopology& topology, dou
       tethers.push_back({i, a, spacing * std::sqrt(dr * dr + dc * dc)});
     }
   }
+  keepNearestOfEachGroup(particles, topology, tethers);
 }
 
 }  // namespace pbd_cloth

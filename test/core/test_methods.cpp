@@ -114,6 +114,69 @@ TEST(Methods, TethersNeverExceedRestDistanceFromAnchors) {
   }
 }
 
+// Anchors joined by stretch links (a pinned edge, the patch one gripper holds) form one group, and
+// a particle keeps only its tether to the nearest anchor of each group: one per particle for a
+// pinned top edge (the anchor of its column, at its row's distance) where every anchor used to give
+// one, two for two separate pins. A gripper holding four particles of a corner adds one more.
+// The single tether still does the job: with 1 pass per step no particle gets further from the
+// anchor of its column than its rest distance, and the edge-hung cloth stretches far less than
+// without tethers.
+TEST(Methods, TethersKeepTheNearestAnchorOfEachLinkedGroup) {
+  SceneConfig scene = hangingCloth(Method::kXpbd);
+  scene.cloth.tethers = true;
+  scene.cloth.pinned = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9};
+  scene.solver.substeps = 1;
+  {
+    Simulation sim(scene);
+    const std::vector<Tether>& tethers = sim.topology().tethers;
+    ASSERT_EQ(tethers.size(), 90u);
+    for (const Tether& t : tethers) {
+      EXPECT_EQ(t.anchor, t.particle % 10) << "particle " << t.particle;
+      EXPECT_NEAR(t.max_length, 0.05 * (t.particle / 10), 1e-15) << "particle " << t.particle;
+    }
+  }
+  double worst_excess = 0.0;  // over the rest distance to the anchor of the particle's column
+  auto largestStrain = [&](bool tethers) {
+    scene.cloth.tethers = tethers;
+    Simulation sim(scene);
+    const Particles& p = sim.particles();
+    double largest = 0.0;
+    for (int k = 0; k < 120; ++k) {
+      sim.step();
+      largest = std::max(largest, sim.stats().max_strain);
+      for (int i = 10; tethers && i < 100; ++i) {
+        const double rest = 0.05 * (i / 10);
+        worst_excess =
+            std::max(worst_excess, (p.position[i] - p.position[i % 10]).norm() / rest - 1);
+      }
+    }
+    return largest;
+  };
+  const double with = largestStrain(true), without = largestStrain(false);
+  std::printf(
+      "top edge pinned, 1 pass: max strain with tethers %.2e, without %.2e; largest excess "
+      "over a column's rest distance %.2e\n",
+      with, without, worst_excess);
+  EXPECT_LE(worst_excess, 1e-12);
+  EXPECT_LT(with, 0.1 * without);
+
+  scene.cloth.tethers = true;
+  scene.cloth.pinned = {0, 9};
+  EXPECT_EQ(Simulation(scene).topology().tethers.size(), 2u * 98u);  // two groups
+  GripperConfig gripper;
+  gripper.name = "hand";
+  gripper.radius = 0.075;  // particles 90, 91, 80 and 81 (0, 0.05 and 0.071 m from the corner)
+  Waypoint hold;
+  hold.pose.position = Vec3(0.0, 0.0, -0.45);  // particle 90, the bottom-left corner
+  hold.grasp = 1;
+  gripper.trajectory = {hold};
+  scene.grippers = {gripper};
+  Simulation held(scene);
+  held.step();
+  ASSERT_EQ(held.particles().isKinematic(81), true);
+  EXPECT_EQ(held.topology().tethers.size(), 3u * 94u);  // the pins' two groups and the gripper's
+}
+
 // Kinematic particles move along the straight line from where they are to their target across the
 // substeps of a step (not in one jump at the first substep), and sit exactly on the gripper at the
 // end of every step. A gripper grasps particles 0 and 1, moves them 0.3 m along x and 0.2 m up in
