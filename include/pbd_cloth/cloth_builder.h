@@ -23,11 +23,4 @@ void buildBending(const Vec3Array& rest, ClothTopology& topology);
 // Returns false for a degenerate (zero-area) hinge, which is then skipped.
 bool makeBendConstraint(const Vec3Array& rest, int i0, int i1, int i2, int i3, BendConstraint& out);
 
-// Long-range attachments from every free cloth particle to the nearest kinematic cloth particle of
-// each group of them joined by stretch links (a pinned corner, a pinned edge, the patch a gripper
-// holds), with the rest distance (geodesic on the flat grid, along the edges of a mesh) as the
-// maximum length.
-void buildTethers(const Particles& particles, const ClothTopology& topology, double spacing,
-                  std::vector<Tether>& tethers);
-
 }  // namespace pbd_cloth

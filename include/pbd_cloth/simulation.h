@@ -13,6 +13,7 @@
 #include "pbd_cloth/scene_config.h"
 #include "pbd_cloth/sim_state.h"
 #include "pbd_cloth/solver.h"
+#include "pbd_cloth/tethers.h"
 
 namespace pbd_cloth {
 
@@ -214,6 +215,9 @@ class Simulation {
   Particles particles_;
   Particles initial_particles_;
   ClothTopology topology_;
+  // Rebuilds topology_.tethers on a grasp or release (cloth.tethers), inside the step when the
+  // grasp is scripted: its scratch is sized in build().
+  TetherBuilder tether_builder_;
   Solver solver_;
   Collisions collisions_;
   std::vector<GripperState> grippers_;

@@ -3,14 +3,12 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <functional>
-#include <limits>
 #include <map>
-#include <queue>
 #include <tuple>
 #include <utility>
 
 #include "pbd_cloth/cloth_mesh.h"
+#include "pbd_cloth/tethers.h"
 
 namespace pbd_cloth {
 
@@ -309,67 +307,6 @@ void placeMeshParticles(const ClothConfig& cloth, const ClothMesh& mesh, Particl
   }
 }
 
-// Graph distances along the mesh edges (rest lengths) from `source`: Dijkstra.
-void edgeDistances(int source, const std::vector<int>& offsets, const std::vector<int>& targets,
-                   const std::vector<double>& lengths, std::vector<double>& distance) {
-  distance.assign(offsets.size() - 1, std::numeric_limits<double>::infinity());
-  using Entry = std::pair<double, int>;
-  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
-  distance[source] = 0.0;
-  queue.emplace(0.0, source);
-  while (!queue.empty()) {
-    const auto [d, v] = queue.top();
-    queue.pop();
-    if (d > distance[v]) continue;
-    for (int k = offsets[v]; k < offsets[v + 1]; ++k) {
-      const double next = d + lengths[k];
-      if (next < distance[targets[k]]) {
-        distance[targets[k]] = next;
-        queue.emplace(next, targets[k]);
-      }
-    }
-  }
-}
-
-// Tethers of a mesh cloth: the rest distance is the shortest path along the mesh edges, an upper
-// bound of the geodesic on the surface (a zig-zag of edges is longer than the straight path
-// across the triangles). Straight distance would be wrong for a curved or folded garment: the two
-// layers of a T-shirt are 2 cm apart in space but half a shirt apart along the cloth.
-void buildMeshTethers(const Particles& particles, const ClothTopology& topology,
-                      std::vector<Tether>& tethers) {
-  const int n = particles.cloth_count;
-  std::vector<int> anchors;
-  for (int i = 0; i < n; ++i) {
-    if (particles.isKinematic(i)) anchors.push_back(i);
-  }
-  if (anchors.empty()) return;
-  std::vector<int> offsets(n + 1, 0);
-  for (const DistanceConstraint& c : topology.stretch) {
-    ++offsets[c.i + 1];
-    ++offsets[c.j + 1];
-  }
-  for (int i = 0; i < n; ++i) offsets[i + 1] += offsets[i];
-  std::vector<int> fill(offsets.begin(), offsets.end() - 1), targets(offsets[n]);
-  std::vector<double> lengths(offsets[n]);
-  for (const DistanceConstraint& c : topology.stretch) {
-    targets[fill[c.i]] = c.j;
-    lengths[fill[c.i]++] = c.rest_length;
-    targets[fill[c.j]] = c.i;
-    lengths[fill[c.j]++] = c.rest_length;
-  }
-  std::vector<std::vector<double>> distance(anchors.size());
-  for (std::size_t a = 0; a < anchors.size(); ++a) {
-    edgeDistances(anchors[a], offsets, targets, lengths, distance[a]);
-  }
-  // Grouped by particle, as projectTethers expects; a part not connected to an anchor gets none.
-  for (int i = 0; i < n; ++i) {
-    if (particles.isKinematic(i)) continue;
-    for (std::size_t a = 0; a < anchors.size(); ++a) {
-      if (std::isfinite(distance[a][i])) tethers.push_back({i, anchors[a], distance[a][i]});
-    }
-  }
-}
-
 }  // namespace
 
 bool makeBendConstraint(const Vec3Array& rest, int i0, int i1, int i2, int i3,
@@ -460,7 +397,10 @@ void buildScene(const SceneConfig& scene, Particles& particles, ClothTopology& t
     addStretch(cloth, particles.position, topology);
   }
   if (cloth.bend_compliance >= 0.0) buildBending(particles.position, topology);
-  if (cloth.tethers) buildTethers(particles, topology, cloth.spacing, topology.tethers);
+  if (cloth.tethers) {
+    TetherBuilder tethers;
+    tethers.build(particles, topology, cloth.spacing, topology.tethers);
+  }
 }
 
 void buildBending(const Vec3Array& rest, ClothTopology& topology) {
@@ -473,92 +413,6 @@ void buildBending(const Vec3Array& rest, ClothTopology& topology) {
   } else {
     addBending(rest, topology);
   }
-}
-
-namespace {
-
-// Anchors joined by stretch links (the patch of cloth one gripper holds, a pinned edge) form a
-// group. Returns each cloth particle's group, 0 .. groups - 1, or -1 for a free particle.
-std::vector<int> anchorGroups(const Particles& particles, const ClothTopology& topology,
-                              int& groups) {
-  const int n = particles.cloth_count;
-  std::vector<int> parent(n);
-  for (int i = 0; i < n; ++i) parent[i] = i;
-  auto root = [&](int i) {
-    while (parent[i] != i) i = parent[i] = parent[parent[i]];
-    return i;
-  };
-  for (const DistanceConstraint& c : topology.stretch) {
-    if (particles.isKinematic(c.i) && particles.isKinematic(c.j)) parent[root(c.i)] = root(c.j);
-  }
-  std::vector<int> group(n, -1), group_of_root(n, -1);
-  groups = 0;
-  for (int i = 0; i < n; ++i) {
-    if (!particles.isKinematic(i)) continue;
-    int& g = group_of_root[root(i)];
-    if (g < 0) g = groups++;
-    group[i] = g;
-  }
-  return group;
-}
-
-// Of each particle's tethers (grouped by particle), keeps the shortest to each group of anchors,
-// in their order. The others add little: their anchors move with the nearest one (one gripper, a
-// fixed edge), and the cloth's own links hold the particle's place relative to them. But every
-// tether is a projection per pass: a gripper holding 6 particles gave every particle 6, and a
-// pinned edge of 50 particles 50 (README, "Choosing a method").
-void keepNearestOfEachGroup(const Particles& particles, const ClothTopology& topology,
-                            std::vector<Tether>& tethers) {
-  int groups = 0;
-  const std::vector<int> group = anchorGroups(particles, topology, groups);
-  std::vector<int> best(groups, -1);  // per group, the kept tether of the current particle
-  std::vector<int> touched;
-  std::size_t kept = 0, end = 0;
-  for (std::size_t begin = 0; begin < tethers.size(); begin = end) {
-    end = begin + 1;
-    while (end < tethers.size() && tethers[end].particle == tethers[begin].particle) ++end;
-    touched.clear();
-    for (std::size_t t = begin; t < end; ++t) {
-      int& b = best[group[tethers[t].anchor]];
-      if (b < 0) {
-        touched.push_back(group[tethers[t].anchor]);
-        b = static_cast<int>(t);
-      } else if (tethers[t].max_length < tethers[b].max_length) {
-        b = static_cast<int>(t);
-      }
-    }
-    for (std::size_t t = begin; t < end; ++t) {
-      if (best[group[tethers[t].anchor]] == static_cast<int>(t)) tethers[kept++] = tethers[t];
-    }
-    for (int g : touched) best[g] = -1;
-  }
-  tethers.resize(kept);
-}
-
-}  // namespace
-
-void buildTethers(const Particles& particles, const ClothTopology& topology, double spacing,
-                  std::vector<Tether>& tethers) {
-  tethers.clear();
-  if (topology.from_mesh) {
-    buildMeshTethers(particles, topology, tethers);
-    keepNearestOfEachGroup(particles, topology, tethers);
-    return;
-  }
-  std::vector<int> anchors;
-  for (int i = 0; i < particles.cloth_count; ++i) {
-    if (particles.isKinematic(i)) anchors.push_back(i);
-  }
-  const int cols = topology.cols;
-  for (int i = 0; i < particles.cloth_count; ++i) {
-    if (particles.isKinematic(i)) continue;
-    for (int a : anchors) {
-      // Geodesic distance on the flat rest grid (the cloth is built flat).
-      const double dr = (i / cols) - (a / cols), dc = (i % cols) - (a % cols);
-      tethers.push_back({i, a, spacing * std::sqrt(dr * dr + dc * dc)});
-    }
-  }
-  keepNearestOfEachGroup(particles, topology, tethers);
 }
 
 }  // namespace pbd_cloth

@@ -96,6 +96,13 @@ void Simulation::build() {
   collisions_.prepare(particles_, topology_);
   solver_.mutableStats() = StepStats();
   solver_.initializeVelocities(particles_, 1.0 / scene_.step_rate);
+  if (scene_.cloth.tethers) {
+    // Room for the tethers of the pins' groups and one more group per gripper (a gripper whose
+    // hold spans separate layers of a folded cloth makes a group of each: more allocates once).
+    const int groups = tether_builder_.countGroups(particles_, topology_) +
+                       static_cast<int>(scene_.grippers.size());
+    tether_builder_.reserve(particles_, topology_, groups, topology_.tethers);
+  }
   grippers_.assign(scene_.grippers.size(), GripperState());
   for (std::size_t g = 0; g < grippers_.size(); ++g) {
     // Room for every cloth particle (28 bytes each), so a grasp inside the step never allocates.
@@ -277,8 +284,8 @@ GraspResult Simulation::setGrasp(int gripper, bool grasp) {
 // Grasp: every free cloth particle within the radius becomes kinematic, held at its offset in
 // the gripper frame; release: they are free again. Returns how many were grasped (released).
 // Composes no message, so the scripted events inside the step allocate nothing: grasped and
-// local_offsets have room for every cloth particle from build() (kinematicSetChanged's tether
-// rebuild, with cloth.tethers on, still allocates).
+// local_offsets have room for every cloth particle from build(), and the tethers' rebuild
+// (cloth.tethers) for the groups of anchors build() expected.
 int Simulation::changeGrasp(int gripper, bool grasp) {
   GripperState& state = grippers_[gripper];
   const int released = static_cast<int>(state.grasped.size());
@@ -317,7 +324,7 @@ void Simulation::releaseGrasp(GripperState& gripper) {
 void Simulation::kinematicSetChanged() {
   wake();  // a grasp or a release: the cloth is held differently
   if (scene_.cloth.tethers) {
-    buildTethers(particles_, topology_, scene_.cloth.spacing, topology_.tethers);
+    tether_builder_.build(particles_, topology_, scene_.cloth.spacing, topology_.tethers);
   }
 }
 

@@ -3,11 +3,13 @@
 // `g_counting` is set, around sim.step() below, and otherwise behave like the default ones.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <new>
+#include <utility>
 #include <vector>
 
 #include "mesh_builders.h"
@@ -113,11 +115,14 @@ TEST(Allocations, StepWithCollisionsAllocatesNothingAfterWarmUp) {
 
 // Scripted grasps and releases fire inside the step (followTrajectories): a gripper takes hold of
 // the loose corner of a cloth pinned at one corner, lifts it, lets go, and takes hold again, all
-// within the counted steps (after 3 warm-up steps at t = 0.05 s). Tethers off: rebuilding them
-// for the new kinematic set allocates (simulation.cpp, changeGrasp).
+// within the counted steps (after 3 warm-up steps at t = 0.05 s), with and without tethers (each
+// grasp and release rebuilds them in the room build() left).
 TEST(Allocations, ScriptedGraspAndReleaseAllocateNothing) {
-  for (Method method : {Method::kXpbd, Method::kVerlet}) {
+  for (const auto& [method, tethers] :
+       {std::pair(Method::kXpbd, false), std::pair(Method::kXpbd, true),
+        std::pair(Method::kVerlet, false)}) {
     SceneConfig scene = test::clothScene(20, 20, 0.03, method);
+    scene.cloth.tethers = tethers;
     scene.cloth.pinned = {0};
     scene.cloth.bend_compliance = 1e-3;
     scene.solver.gravity.setZero();
@@ -143,6 +148,7 @@ TEST(Allocations, ScriptedGraspAndReleaseAllocateNothing) {
     for (int k = 0; k < 3; ++k) sim.step();
     ASSERT_FALSE(sim.gripperGrasping(0));
     int grasps = 0, releases = 0;
+    std::size_t most_tethers = 0;
     bool holding = false;
     g_allocations = 0;
     for (int k = 0; k < 42; ++k) {  // to t = 0.75 s
@@ -153,10 +159,13 @@ TEST(Allocations, ScriptedGraspAndReleaseAllocateNothing) {
         holding = !holding;
         ++(holding ? grasps : releases);
       }
+      most_tethers = std::max(most_tethers, sim.topology().tethers.size());
     }
     EXPECT_EQ(grasps, 2) << toString(method) << ": the script's grasps did not happen";
     EXPECT_EQ(releases, 2) << toString(method);
-    EXPECT_EQ(g_allocations.load(), 0) << toString(method);
+    EXPECT_EQ(g_allocations.load(), 0) << toString(method) << " tethers " << tethers;
+    // While held: the 395 free particles tethered to the pin and to the hand's 4 particles.
+    if (tethers) EXPECT_EQ(most_tethers, 395u * 2u);
   }
 }
 

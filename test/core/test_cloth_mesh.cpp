@@ -200,6 +200,38 @@ TEST(ClothMesh, TethersFollowTheMeshNotTheStraightLine) {
   }
 }
 
+// Two pinned vertices joined by an edge are one group of anchors: each free vertex gets one
+// tether, to whichever of the two is nearer along the edges, at that distance (the several-source
+// search against one search from each pin alone). Vertices 0 and n - 1 of the top edge are
+// not joined: two tethers each.
+TEST(ClothMesh, TethersGoToTheNearerOfTwoLinkedPins) {
+  const int n = 10;
+  const std::string path = writeObj("tether_pair.obj", squareObj(n, 0.05, 0.2, 5));
+  auto tethersWith = [&](const std::vector<int>& pins) {
+    SceneConfig scene = meshScene(path);
+    scene.cloth.pinned = pins;
+    scene.cloth.tethers = true;
+    return Simulation(scene).topology().tethers;
+  };
+  const std::vector<Tether> pair = tethersWith({0, 1}), from0 = tethersWith({0}),
+                            from1 = tethersWith({1});
+  ASSERT_EQ(pair.size(), static_cast<std::size_t>(n * n - 2));
+  ASSERT_EQ(from0.size(), static_cast<std::size_t>(n * n - 1));
+  int nearer_to_1 = 0;
+  for (const Tether& t : pair) {
+    // from0 and from1 hold every particle but their own pin, in particle order.
+    const Tether& t0 = from0[t.particle - 1];
+    const Tether& t1 = from1[t.particle < 1 ? t.particle : t.particle - 1];
+    ASSERT_EQ(t0.particle, t.particle);
+    ASSERT_EQ(t1.particle, t.particle);
+    EXPECT_EQ(t.max_length, std::min(t0.max_length, t1.max_length)) << "particle " << t.particle;
+    EXPECT_EQ(t.anchor, t1.max_length < t0.max_length ? 1 : 0) << "particle " << t.particle;
+    nearer_to_1 += t.anchor == 1;
+  }
+  EXPECT_GT(nearer_to_1, n);  // both pins are somebody's nearest
+  EXPECT_EQ(tethersWith({0, n - 1}).size(), 2u * (n * n - 2));
+}
+
 // A half cylinder of radius R (axis along x), n_around x n_along vertices, as OBJ text.
 std::string halfCylinderObj(double radius, double length, int around, int along) {
   std::ostringstream obj;
