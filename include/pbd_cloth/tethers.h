@@ -37,6 +37,8 @@ class TetherBuilder {
                  std::vector<Tether>& tethers);
   void buildMesh(const Particles& particles, const ClothTopology& topology,
                  std::vector<Tether>& tethers);
+  // The mesh's edges as lists per particle, from topology.stretch (reserve() always; build()
+  // when nothing was reserved for a cloth of this size).
   void linkEdges(const ClothTopology& topology, int n);
   // Shortest paths along the mesh edges from every anchor of `group` at once (Dijkstra with
   // several sources): the distance to the group's nearest anchor and which anchor it is.
@@ -50,7 +52,6 @@ class TetherBuilder {
   // Grid: the current particle's nearest anchor in each group and its distance.
   std::vector<int> nearest_;
   std::vector<double> nearest_distance_;
-  std::vector<int> touched_;  // groups in order of their nearest anchor
   // Mesh: the edges as lists per particle (CSR), and per group and particle the distance along
   // them to the group's nearest anchor and that anchor (groups_ x n, row by row).
   std::vector<int> edge_offsets_, edge_targets_, edge_fill_;

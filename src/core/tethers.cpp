@@ -14,8 +14,7 @@ constexpr double kInfinity = std::numeric_limits<double>::infinity();
 void TetherBuilder::reserve(const Particles& particles, const ClothTopology& topology, int groups,
                             std::vector<Tether>& tethers) {
   const int n = particles.cloth_count;
-  for (std::vector<int>* v :
-       {&anchors_, &parent_, &group_, &group_of_root_, &nearest_, &touched_}) {
+  for (std::vector<int>* v : {&anchors_, &parent_, &group_, &group_of_root_, &nearest_}) {
     v->reserve(n);
   }
   nearest_distance_.reserve(n);
@@ -100,9 +99,7 @@ void TetherBuilder::buildGrid(const Particles& particles, const ClothTopology& t
   }
 }
 
-// The mesh's edges as lists per particle; built once (the topology does not change).
 void TetherBuilder::linkEdges(const ClothTopology& topology, int n) {
-  if (static_cast<int>(edge_offsets_.size()) == n + 1) return;
   edge_offsets_.assign(n + 1, 0);
   for (const DistanceConstraint& c : topology.stretch) {
     ++edge_offsets_[c.i + 1];
@@ -157,7 +154,7 @@ void TetherBuilder::groupDistances(int group, int n) {
 void TetherBuilder::buildMesh(const Particles& particles, const ClothTopology& topology,
                               std::vector<Tether>& tethers) {
   const int n = particles.cloth_count;
-  linkEdges(topology, n);
+  if (static_cast<int>(edge_offsets_.size()) != n + 1) linkEdges(topology, n);
   const std::size_t cells = static_cast<std::size_t>(groups_) * n;
   distance_.assign(cells, kInfinity);
   source_.assign(cells, -1);

@@ -8,7 +8,9 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
 #include <new>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -116,12 +118,36 @@ TEST(Allocations, StepWithCollisionsAllocatesNothingAfterWarmUp) {
 // Scripted grasps and releases fire inside the step (followTrajectories): a gripper takes hold of
 // the loose corner of a cloth pinned at one corner, lifts it, lets go, and takes hold again, all
 // within the counted steps (after 3 warm-up steps at t = 0.05 s), with and without tethers (each
-// grasp and release rebuilds them in the room build() left).
+// grasp and release rebuilds them in the room build() left), on the grid and on the same grid
+// read as a mesh (its tethers come from searches along the edges).
 TEST(Allocations, ScriptedGraspAndReleaseAllocateNothing) {
-  for (const auto& [method, tethers] :
-       {std::pair(Method::kXpbd, false), std::pair(Method::kXpbd, true),
-        std::pair(Method::kVerlet, false)}) {
+  struct Case {
+    Method method;
+    bool tethers, mesh;
+  };
+  for (const Case& c : {Case{Method::kXpbd, false, false}, Case{Method::kXpbd, true, false},
+                        Case{Method::kXpbd, true, true}, Case{Method::kVerlet, false, false}}) {
+    const Method method = c.method;
+    const bool tethers = c.tethers;
     SceneConfig scene = test::clothScene(20, 20, 0.03, method);
+    if (c.mesh) {
+      // Vertex r * 20 + c at (c s, -r s, 0): the grid's particles, numbered as the grid's.
+      const std::string path = ::testing::TempDir() + "pbd_cloth_allocations_grid.obj";
+      std::ofstream obj(path);
+      obj.precision(17);
+      for (int r = 0; r < 20; ++r) {
+        for (int col = 0; col < 20; ++col) obj << "v " << col * 0.03 << " " << -r * 0.03 << " 0\n";
+      }
+      for (int r = 0; r + 1 < 20; ++r) {
+        for (int col = 0; col + 1 < 20; ++col) {
+          const int a = r * 20 + col + 1, b = a + 1, d = a + 20, e = d + 1;  // 1-based
+          obj << "f " << a << " " << d << " " << e << "\nf " << a << " " << e << " " << b << "\n";
+        }
+      }
+      obj.close();
+      scene.cloth.mesh = path;
+      loadClothMesh(scene);
+    }
     scene.cloth.tethers = tethers;
     scene.cloth.pinned = {0};
     scene.cloth.bend_compliance = 1e-3;
@@ -163,7 +189,8 @@ TEST(Allocations, ScriptedGraspAndReleaseAllocateNothing) {
     }
     EXPECT_EQ(grasps, 2) << toString(method) << ": the script's grasps did not happen";
     EXPECT_EQ(releases, 2) << toString(method);
-    EXPECT_EQ(g_allocations.load(), 0) << toString(method) << " tethers " << tethers;
+    EXPECT_EQ(g_allocations.load(), 0)
+        << toString(method) << " tethers " << tethers << " mesh " << c.mesh;
     // While held: the 395 free particles tethered to the pin and to the hand's 4 particles.
     if (tethers) EXPECT_EQ(most_tethers, 395u * 2u);
   }
