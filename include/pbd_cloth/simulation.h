@@ -218,6 +218,9 @@ class Simulation {
   // Rebuilds topology_.tethers on a grasp or release (cloth.tethers), inside the step when the
   // grasp is scripted: its scratch is sized in build().
   TetherBuilder tether_builder_;
+  // Per cloth particle, the body holding it while it is kinematic: -1 pinned, g gripper g (so
+  // that two grippers' neighbouring patches are two groups of anchors for the tethers).
+  std::vector<int> anchor_holder_;
   Solver solver_;
   Collisions collisions_;
   std::vector<GripperState> grippers_;

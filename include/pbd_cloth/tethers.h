@@ -1,13 +1,14 @@
 // Long-range attachments (Kim, Chentanez, Mueller 2012): the tethers of a cloth for its current set
 // of kinematic particles (the anchors), rebuilt when a gripper grasps or releases.
 //
-// Anchors joined by stretch links form a group: one pinned corner, a pinned edge, the patch of
-// particles one gripper holds. Each free particle gets one tether to the nearest anchor of each
-// group (the shortest rest distance: on the flat grid for a grid cloth, along the mesh edges for a
-// mesh), not one to every anchor: the other anchors of a group move with it (one gripper, one
-// fixed edge), and the cloth's own links keep the particle's place relative to them. A gripper
-// holding 6 particles used to give every particle 6 tethers, a pinned edge of 50 particles 50, each
-// a projection per pass (README, "Choosing a method").
+// Anchors joined by stretch links and held by the same body form a group: one pinned corner, a
+// pinned edge, the patch of particles one gripper holds (two grippers holding neighbouring patches
+// make two groups, as a gripper's patch beside a pin does). Each free particle gets one tether to
+// the nearest anchor of each group (the shortest rest distance: on the flat grid for a grid cloth,
+// along the mesh edges for a mesh), not one to every anchor: the other anchors of a group move with
+// it (one gripper, one fixed edge), and the cloth's own links keep the particle's place relative to
+// them. A gripper holding 6 particles used to give every particle 6 tethers, a pinned edge of 50
+// particles 50, each a projection per pass (README, "Choosing a method").
 #pragma once
 
 #include <utility>
@@ -23,16 +24,19 @@ class TetherBuilder {
   // allocates nothing (a grasp inside the step) while the anchors form no more groups than that.
   void reserve(const Particles& particles, const ClothTopology& topology, int groups,
                std::vector<Tether>& tethers);
-  // The groups the cloth's kinematic particles form now.
-  int countGroups(const Particles& particles, const ClothTopology& topology);
+  // The groups the cloth's kinematic particles form now. `holder`: per cloth particle, the body
+  // that holds it when it is kinematic (e.g. -1 pinned, g gripper g); empty: all one body.
+  int countGroups(const Particles& particles, const ClothTopology& topology,
+                  const std::vector<int>& holder = {});
   // Replaces `tethers` with those of the current kinematic set, grouped by particle (as
   // Solver::projectTethers expects), each particle's in the order of their anchors. A part of a
   // mesh not connected to an anchor gets none. `spacing`: the grid's (unused for a mesh).
   void build(const Particles& particles, const ClothTopology& topology, double spacing,
-             std::vector<Tether>& tethers);
+             std::vector<Tether>& tethers, const std::vector<int>& holder = {});
 
  private:
-  void findGroups(const Particles& particles, const ClothTopology& topology);
+  void findGroups(const Particles& particles, const ClothTopology& topology,
+                  const std::vector<int>& holder);
   void buildGrid(const Particles& particles, const ClothTopology& topology, double spacing,
                  std::vector<Tether>& tethers);
   void buildMesh(const Particles& particles, const ClothTopology& topology,

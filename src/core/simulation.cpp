@@ -96,14 +96,15 @@ void Simulation::build() {
   collisions_.prepare(particles_, topology_);
   solver_.mutableStats() = StepStats();
   solver_.initializeVelocities(particles_, 1.0 / scene_.step_rate);
+  grippers_.assign(scene_.grippers.size(), GripperState());
+  anchor_holder_.assign(particles_.cloth_count, -1);
   if (scene_.cloth.tethers) {
     // Room for the tethers of the pins' groups and one more group per gripper (a gripper whose
     // hold spans separate layers of a folded cloth makes a group of each: more allocates once).
-    const int groups = tether_builder_.countGroups(particles_, topology_) +
+    const int groups = tether_builder_.countGroups(particles_, topology_, anchor_holder_) +
                        static_cast<int>(scene_.grippers.size());
     tether_builder_.reserve(particles_, topology_, groups, topology_.tethers);
   }
-  grippers_.assign(scene_.grippers.size(), GripperState());
   for (std::size_t g = 0; g < grippers_.size(); ++g) {
     // Room for every cloth particle (28 bytes each), so a grasp inside the step never allocates.
     grippers_[g].grasped.reserve(particles_.cloth_count);
@@ -324,7 +325,12 @@ void Simulation::releaseGrasp(GripperState& gripper) {
 void Simulation::kinematicSetChanged() {
   wake();  // a grasp or a release: the cloth is held differently
   if (scene_.cloth.tethers) {
-    tether_builder_.build(particles_, topology_, scene_.cloth.spacing, topology_.tethers);
+    std::fill(anchor_holder_.begin(), anchor_holder_.end(), -1);
+    for (std::size_t g = 0; g < grippers_.size(); ++g) {
+      for (int i : grippers_[g].grasped) anchor_holder_[i] = static_cast<int>(g);
+    }
+    tether_builder_.build(particles_, topology_, scene_.cloth.spacing, topology_.tethers,
+                          anchor_holder_);
   }
 }
 

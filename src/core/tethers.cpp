@@ -28,15 +28,16 @@ void TetherBuilder::reserve(const Particles& particles, const ClothTopology& top
   tethers.reserve(static_cast<std::size_t>(groups) * n);
 }
 
-int TetherBuilder::countGroups(const Particles& particles, const ClothTopology& topology) {
-  findGroups(particles, topology);
+int TetherBuilder::countGroups(const Particles& particles, const ClothTopology& topology,
+                               const std::vector<int>& holder) {
+  findGroups(particles, topology, holder);
   return groups_;
 }
 
 void TetherBuilder::build(const Particles& particles, const ClothTopology& topology, double spacing,
-                          std::vector<Tether>& tethers) {
+                          std::vector<Tether>& tethers, const std::vector<int>& holder) {
   tethers.clear();
-  findGroups(particles, topology);
+  findGroups(particles, topology, holder);
   if (anchors_.empty()) return;
   if (topology.from_mesh) {
     buildMesh(particles, topology, tethers);
@@ -45,9 +46,10 @@ void TetherBuilder::build(const Particles& particles, const ClothTopology& topol
   }
 }
 
-// Union-find over the stretch links whose two ends are both kinematic; groups numbered in the
-// order of their first anchor.
-void TetherBuilder::findGroups(const Particles& particles, const ClothTopology& topology) {
+// Union-find over the stretch links whose two ends are both kinematic and held by the same body;
+// groups numbered in the order of their first anchor.
+void TetherBuilder::findGroups(const Particles& particles, const ClothTopology& topology,
+                               const std::vector<int>& holder) {
   const int n = particles.cloth_count;
   parent_.resize(n);
   for (int i = 0; i < n; ++i) parent_[i] = i;
@@ -56,7 +58,9 @@ void TetherBuilder::findGroups(const Particles& particles, const ClothTopology& 
     return i;
   };
   for (const DistanceConstraint& c : topology.stretch) {
-    if (particles.isKinematic(c.i) && particles.isKinematic(c.j)) parent_[root(c.i)] = root(c.j);
+    if (!particles.isKinematic(c.i) || !particles.isKinematic(c.j)) continue;
+    if (!holder.empty() && holder[c.i] != holder[c.j]) continue;
+    parent_[root(c.i)] = root(c.j);
   }
   anchors_.clear();
   group_.assign(n, -1);

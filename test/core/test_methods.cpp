@@ -117,7 +117,8 @@ TEST(Methods, TethersNeverExceedRestDistanceFromAnchors) {
 // Anchors joined by stretch links (a pinned edge, the patch one gripper holds) form one group, and
 // a particle keeps only its tether to the nearest anchor of each group: one per particle for a
 // pinned top edge (the anchor of its column, at its row's distance) where every anchor used to give
-// one, two for two separate pins. A gripper holding four particles of a corner adds one more.
+// one, two for two separate pins. A gripper holding four particles of a corner adds one more, and a
+// second gripper holding the patch beside it one more again.
 // The single tether still does the job: with 1 pass per step no particle gets further from the
 // anchor of its column than its rest distance, and the edge-hung cloth stretches far less than
 // without tethers.
@@ -175,6 +176,17 @@ TEST(Methods, TethersKeepTheNearestAnchorOfEachLinkedGroup) {
   held.step();
   ASSERT_EQ(held.particles().isKinematic(81), true);
   EXPECT_EQ(held.topology().tethers.size(), 3u * 94u);  // the pins' two groups and the gripper's
+
+  // A second gripper holding the patch beside the first (82-84 and 92-94, linked to 81 and 91): a
+  // group of its own, since the two grippers may move apart.
+  GripperConfig second = gripper;
+  second.name = "other";
+  second.trajectory.front().pose.position = Vec3(0.15, 0.0, -0.45);  // particle 93
+  scene.grippers = {gripper, second};
+  Simulation both(scene);
+  both.step();
+  ASSERT_TRUE(both.particles().isKinematic(82) && both.particles().isKinematic(94));
+  EXPECT_EQ(both.topology().tethers.size(), 4u * 88u);
 }
 
 // Kinematic particles move along the straight line from where they are to their target across the
