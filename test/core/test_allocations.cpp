@@ -8,13 +8,13 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <fstream>
 #include <new>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "mesh_builders.h"
+#include "obj_text.h"
 #include "pbd_cloth/depth_camera.h"
 #include "pbd_cloth/scene_assets.h"
 #include "pbd_cloth/simulation.h"
@@ -131,20 +131,9 @@ TEST(Allocations, ScriptedGraspAndReleaseAllocateNothing) {
     const bool tethers = c.tethers;
     SceneConfig scene = test::clothScene(20, 20, 0.03, method);
     if (c.mesh) {
-      // Vertex r * 20 + c at (c s, -r s, 0): the grid's particles, numbered as the grid's.
-      const std::string path = ::testing::TempDir() + "pbd_cloth_allocations_grid.obj";
-      std::ofstream obj(path);
-      obj.precision(17);
-      for (int r = 0; r < 20; ++r) {
-        for (int col = 0; col < 20; ++col) obj << "v " << col * 0.03 << " " << -r * 0.03 << " 0\n";
-      }
-      for (int r = 0; r + 1 < 20; ++r) {
-        for (int col = 0; col + 1 < 20; ++col) {
-          const int a = r * 20 + col + 1, b = a + 1, d = a + 20, e = d + 1;  // 1-based
-          obj << "f " << a << " " << d << " " << e << "\nf " << a << " " << e << " " << b << "\n";
-        }
-      }
-      obj.close();
+      // The grid's particles, numbered as the grid's (no jitter), as a mesh.
+      const std::string path =
+          test::writeObj("pbd_cloth_allocations_grid.obj", test::squareObj(20, 0.03, 0.0, 1));
       scene.cloth.mesh = path;
       loadClothMesh(scene);
     }

@@ -6,13 +6,12 @@
 
 #include <algorithm>
 #include <cmath>
-#include <filesystem>
 #include <fstream>
-#include <random>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "obj_text.h"
 #include "pbd_cloth/cloth_builder.h"
 #include "pbd_cloth/cloth_mesh.h"
 #include "pbd_cloth/metrics.h"
@@ -24,14 +23,10 @@
 namespace pbd_cloth {
 namespace {
 
-const std::string kSourceDirectory = PBD_CLOTH_SOURCE_DIR;
+using test::squareObj;
+using test::writeObj;
 
-// Writes `text` to a file of that name in the test's temporary directory; returns its path.
-std::string writeObj(const std::string& name, const std::string& text) {
-  const std::string path = (std::filesystem::temp_directory_path() / name).string();
-  std::ofstream(path) << text;
-  return path;
-}
+const std::string kSourceDirectory = PBD_CLOTH_SOURCE_DIR;
 
 // A scene with the cloth from `path` (no gravity change: the defaults of clothScene).
 SceneConfig meshScene(const std::string& path) {
@@ -106,35 +101,6 @@ TEST(ClothMesh, ParticleIIsTheFilesVertexIPlacedByOriginRpyAndScale) {
     }
   }
   EXPECT_EQ(sim.topology().triangles, faces);
-}
-
-// A square of n x n particles at pitch s in the grid's layout (particle r * n + c at
-// (c s, -r s, 0)); interior vertices moved by up to `jitter` s, every cell split along the
-// other diagonal than the grid's checkerboard where `flip` says so.
-std::string squareObj(int n, double s, double jitter, unsigned seed) {
-  std::mt19937 random(seed);
-  std::uniform_real_distribution<double> offset(-jitter, jitter);
-  std::ostringstream obj;
-  obj.precision(17);
-  for (int r = 0; r < n; ++r) {
-    for (int c = 0; c < n; ++c) {
-      const bool interior = r > 0 && c > 0 && r + 1 < n && c + 1 < n;
-      const double dx = interior ? offset(random) : 0.0, dy = interior ? offset(random) : 0.0;
-      obj << "v " << (c + dx) * s << " " << -(r + dy) * s << " 0\n";
-    }
-  }
-  std::bernoulli_distribution flip(0.5);
-  for (int r = 0; r + 1 < n; ++r) {
-    for (int c = 0; c + 1 < n; ++c) {
-      const int a = r * n + c + 1, b = a + 1, d = a + n, e = d + 1;  // 1-based
-      if (flip(random)) {
-        obj << "f " << a << " " << d << " " << e << "\nf " << a << " " << e << " " << b << "\n";
-      } else {
-        obj << "f " << a << " " << d << " " << b << "\nf " << b << " " << d << " " << e << "\n";
-      }
-    }
-  }
-  return obj.str();
 }
 
 // Height of the centre of mass after 4 s hanging from the two top corners.
@@ -219,9 +185,10 @@ TEST(ClothMesh, TethersGoToTheNearerOfTwoLinkedPins) {
   ASSERT_EQ(from0.size(), static_cast<std::size_t>(n * n - 1));
   int nearer_to_1 = 0;
   for (const Tether& t : pair) {
-    // from0 and from1 hold every particle but their own pin, in particle order.
+    // from0 and from1 hold every particle but their own pin, in particle order: particle k >= 2
+    // (every one `pair` holds) is their entry k - 1.
     const Tether& t0 = from0[t.particle - 1];
-    const Tether& t1 = from1[t.particle < 1 ? t.particle : t.particle - 1];
+    const Tether& t1 = from1[t.particle - 1];
     ASSERT_EQ(t0.particle, t.particle);
     ASSERT_EQ(t1.particle, t.particle);
     EXPECT_EQ(t.max_length, std::min(t0.max_length, t1.max_length)) << "particle " << t.particle;
