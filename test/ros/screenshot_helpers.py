@@ -62,8 +62,9 @@ class ScreenshotCase(unittest.TestCase):
         self.workdir = tempfile.mkdtemp(prefix='pbd_cloth_screenshot_')
 
     def tearDown(self):
+        self.report_processes()
         # Everything started here, by handle, newest first.
-        for process in reversed(self.processes):
+        for process, _ in reversed(self.processes):
             if process.poll() is None:
                 process.terminate()
                 try:
@@ -76,8 +77,25 @@ class ScreenshotCase(unittest.TestCase):
     def start(self, command, log_name, env=None):
         log = open(os.path.join(self.workdir, log_name), 'w')
         process = subprocess.Popen(command, stdout=log, stderr=subprocess.STDOUT, env=env)
-        self.processes.append(process)
+        self.processes.append((process, log_name))
         return process
+
+    def report_processes(self, lines=10):
+        """Prints, for the test's output (kept in its result file, and shown by
+        scripts/count_test_results when the test failed), whether each process started here still
+        runs and the end of its log: an rviz or Xvfb that died or complained is the first thing to
+        look at when a picture is wrong."""
+        for process, log_name in self.processes:
+            code = process.poll()
+            print('screenshot: %s %s' % (log_name, 'running' if code is None
+                                         else 'exited with status %d' % code))
+            try:
+                with open(os.path.join(self.workdir, log_name), errors='replace') as log:
+                    tail = [line for line in log.read().splitlines() if line.strip()][-lines:]
+            except OSError as error:
+                tail = ['(unreadable: %s)' % error]
+            for line in tail:
+                print('screenshot:   ' + line[:300])
 
     def start_display(self):
         for tool in ('Xvfb', 'xwd', '/usr/bin/convert', 'rviz'):
