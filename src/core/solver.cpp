@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "pbd_cloth/flat_hinges.h"
+#include "pbd_cloth/tether_projection.h"
 
 namespace pbd_cloth {
 
@@ -19,9 +20,6 @@ double seconds(Clock::time_point a, Clock::time_point b) {
 constexpr double kMinLength = 1e-12;
 // Below this a constraint's generalized inverse mass is zero (all particles kinematic): skipped.
 constexpr double kMinInverseMass = 1e-300;
-// A tether counts as satisfied up to this relative excess: the rounding of a projection onto its
-// own sphere, so a satisfied tether is not projected again and again.
-constexpr double kTetherSlack = 1e-14;
 // The stretch links read positions as one flat array x0 y0 z0 x1 ... (stretch_links.h).
 static_assert(sizeof(Vec3) == 3 * sizeof(double), "Vec3Array must be densely packed");
 
@@ -507,80 +505,6 @@ void Solver::prepareBendStep(const Particles& p, const ClothTopology& topology, 
   }
 }
 
-namespace {
-
-// Projection of x onto the ball |x - a| <= r (tethers are unilateral). Returns the distance moved.
-double projectIntoBall(Vec3& x, const Vec3& a, double r) {
-  const Vec3 delta = x - a;
-  const double length = delta.norm();
-  if (length <= r * (1.0 + kTetherSlack) || length < kMinLength) return 0.0;
-  x -= ((length - r) / length) * delta;
-  return length - r;
-}
-
-// Nearest point of the lens |x - a| <= ra, |x - b| <= rb (the case of two pinned corners). When
-// neither single-ball projection lies in the other ball, the nearest point is on the circle where
-// the spheres meet: centre a + t u, radius sqrt(ra^2 - t^2), t = (D^2 + ra^2 - rb^2) / (2D). Balls
-// that only touch (a particle of the top row between two pins at their rest distance) make that
-// circle a point, where alternating projections would only creep towards it. Balls that do not
-// meet (anchors pulled apart beyond the rest distance) have no feasible point: the particle then
-// goes to the point of the axis that splits the excess in proportion to the radii.
-double projectIntoLens(Vec3& x, const Vec3& a, double ra, const Vec3& b, double rb) {
-  const Vec3 start = x;
-  Vec3 pa = x, pb = x;
-  projectIntoBall(pa, a, ra);
-  projectIntoBall(pb, b, rb);
-  const bool pa_in_b = (pa - b).norm() <= rb * (1.0 + kTetherSlack);
-  const bool pb_in_a = (pb - a).norm() <= ra * (1.0 + kTetherSlack);
-  if (pa_in_b || pb_in_a) {
-    // Both candidates feasible: the nearer one (only possible when x is already inside both).
-    x = (pa_in_b && (!pb_in_a || (pa - start).squaredNorm() <= (pb - start).squaredNorm())) ? pa
-                                                                                            : pb;
-    return (x - start).norm();
-  }
-  const Vec3 axis = b - a;
-  const double distance = axis.norm();
-  if (distance < kMinLength) return 0.0;  // coincident anchors of different radii: nothing to do
-  const Vec3 u = axis / distance;
-  if (distance >= ra + rb) {
-    x = a + (ra / (ra + rb) * distance) * u;
-    return (x - start).norm();
-  }
-  const double t = (distance * distance + ra * ra - rb * rb) / (2.0 * distance);
-  const double rho = std::sqrt(std::max(0.0, ra * ra - t * t));
-  Vec3 radial = (x - a) - (x - a).dot(u) * u;
-  const double radial_length = radial.norm();
-  radial = radial_length > kMinLength ? Vec3(radial / radial_length) : u.unitOrthogonal();
-  x = a + t * u + rho * radial;
-  return (x - start).norm();
-}
-
-// The reactions on the two anchors of a lens projection from `start` to `x`: at the nearest point
-// of the lens the move is -(mu_a n_a + mu_b n_b), n the unit vectors from each anchor to x and
-// mu >= 0 the two tethers' multipliers (the KKT condition), so solving that 2 x 2 system splits the
-// momentum m (start - x) between the anchors. When n_a and n_b are (nearly) parallel the split is
-// not determined by the geometry (anchors pulled apart beyond the rest distance): halves.
-void addLensReactions(const Vec3& start, const Vec3& x, double mass, int anchor_a, int anchor_b,
-                      const Particles& p, Vec3Array& reaction) {
-  const Vec3 move = x - start;
-  const Vec3 to_a = x - p.position[anchor_a], to_b = x - p.position[anchor_b];
-  const double la = to_a.norm(), lb = to_b.norm();
-  if (la > kMinLength && lb > kMinLength) {
-    const Vec3 na = to_a / la, nb = to_b / lb;
-    const double c = na.dot(nb), det = 1.0 - c * c;
-    if (det > 1e-6) {
-      const double ra = -move.dot(na), rb = -move.dot(nb);
-      reaction[anchor_a] += (mass * (ra - c * rb) / det) * na;
-      reaction[anchor_b] += (mass * (rb - c * ra) / det) * nb;
-      return;
-    }
-  }
-  reaction[anchor_a] -= 0.5 * mass * move;
-  reaction[anchor_b] -= 0.5 * mass * move;
-}
-
-}  // namespace
-
 // Long-range attachments (Kim et al. 2012): unilateral, only the free particle moves, so a
 // tether never fights the anchor. A particle with several anchors must end inside the
 // intersection of their balls, and projecting onto one ball can push it out of another: its
@@ -589,6 +513,10 @@ void addLensReactions(const Vec3& start, const Vec3& x, double mass, int anchor_
 // those, and the particle goes to the nearest point of the lens of a and b. Two anchors (two pinned
 // corners, the common case) are solved exactly in one round, including the touching balls of a
 // taut row where plain alternating projections only creep towards the single feasible point.
+//
+// One tether, or two with both anchors kinematic (every particle of a cloth hung from two pins or
+// held by two grippers), take the shortcuts of tether_projection.h: the same positions to the bit,
+// without the square roots the rounds take twice.
 double Solver::projectTethers(Particles& p, const ClothTopology& topology) {
   constexpr int kMaxRounds = 16;
   const std::vector<Tether>& tethers = topology.tethers;
@@ -609,7 +537,8 @@ double Solver::projectTethers(Particles& p, const ClothTopology& topology) {
     }
     return found;
   };
-  double max_change = 0.0;
+  double max_change = 0.0, max_change_squared = 0.0;
+  AnchorAxis axis;  // anchors stay put during the pass
   std::size_t end = 0;
   for (std::size_t begin = 0; begin < count; begin = end) {
     const int particle = tethers[begin].particle;
@@ -617,7 +546,27 @@ double Solver::projectTethers(Particles& p, const ClothTopology& topology) {
     while (end < count && tethers[end].particle == particle) ++end;
     if (p.inverse_mass[particle] == 0.0) continue;
     Vec3& x = p.position[particle];
-    for (int round = 0; round < kMaxRounds; ++round) {
+    int first_round = 0;
+    const Tether& t0 = tethers[begin];
+    if (end - begin <= 2 && p.inverse_mass[t0.anchor] == 0.0) {
+      double moved_squared = 0.0;
+      if (end - begin == 1) {
+        moved_squared = projectTetherSingle(x, p.mass[particle], p.position[t0.anchor],
+                                            t0.max_length, reaction_[t0.anchor]);
+        max_change_squared = std::max(max_change_squared, moved_squared);
+        continue;
+      }
+      const Tether& t1 = tethers[begin + 1];
+      if (p.inverse_mass[t1.anchor] == 0.0) {
+        const bool settled = projectTetherPair(
+            x, p.mass[particle], p.position[t0.anchor], t0.max_length, p.position[t1.anchor],
+            t1.max_length, reaction_[t0.anchor], reaction_[t1.anchor], axis, moved_squared);
+        max_change_squared = std::max(max_change_squared, moved_squared);
+        if (settled) continue;
+        first_round = 1;  // the rounds go on from the second, as they would have
+      }
+    }
+    for (int round = first_round; round < kMaxRounds; ++round) {
       const int a = worst(begin, end, x, count);
       if (a < 0) break;
       const Tether& ta = tethers[a];
@@ -635,10 +584,11 @@ double Solver::projectTethers(Particles& p, const ClothTopology& topology) {
       const Vec3 start = x;
       max_change = std::max(max_change, projectIntoLens(x, p.position[ta.anchor], ta.max_length,
                                                         p.position[tb.anchor], tb.max_length));
-      addLensReactions(start, x, p.mass[particle], ta.anchor, tb.anchor, p, reaction_);
+      addLensReactions(start, x, p.mass[particle], p.position[ta.anchor], p.position[tb.anchor],
+                       reaction_[ta.anchor], reaction_[tb.anchor]);
     }
   }
-  return max_change;
+  return std::max(max_change, std::sqrt(max_change_squared));
 }
 
 // Jacobi: every correction of a pass was computed from the same positions and is applied here at
