@@ -3,6 +3,8 @@
 // an anchor would feel is returned as a reaction (the momentum it gave the particle, reversed).
 #pragma once
 
+#include <vector>
+
 #include "pbd_cloth/particles.h"
 
 namespace pbd_cloth {
@@ -15,13 +17,22 @@ constexpr double kTetherSlack = 1e-14;
 double projectIntoBall(Vec3& x, const Vec3& a, double r);
 
 // Nearest point of the lens |x - a| <= ra, |x - b| <= rb, for an x that a's ball alone does not
-// take into b's (the general rounds of Solver::projectTethers). Returns the distance moved.
+// take into b's (the general rounds, projectTetherRounds). Returns the distance moved.
 double projectIntoLens(Vec3& x, const Vec3& a, double ra, const Vec3& b, double rb);
 
 // The reactions on the two anchors of a lens projection from `start` to `x` (particle mass
 // `mass`), added to reaction_a and reaction_b.
 void addLensReactions(const Vec3& start, const Vec3& x, double mass, const Vec3& a, const Vec3& b,
                       Vec3& reaction_a, Vec3& reaction_b);
+
+// The general rounds for one particle's tethers [first, last) (Solver::projectTethers), from round
+// `first_round` (of at most 16): a = the most violated tether; if the projection into a's ball
+// violates another, b = the worst of those, and the particle goes to the nearest point of the
+// lens of a and b. Anchors whose inverse mass is not 0 are ignored. `x` may be the particle's own
+// entry of `position` (never an anchor's). Returns the largest distance moved.
+double projectTetherRounds(Vec3& x, double mass, const Tether* first, const Tether* last,
+                           const Vec3Array& position, const std::vector<double>& inverse_mass,
+                           Vec3Array& reaction, int first_round);
 
 // The unit vector and distance from one anchor to another, for the lens's circle: the same for
 // every particle tethered to those two (a cloth hung from two pins: all of them), so computed

@@ -518,25 +518,8 @@ void Solver::prepareBendStep(const Particles& p, const ClothTopology& topology, 
 // held by two grippers), take the shortcuts of tether_projection.h: the same positions to the bit,
 // without the square roots the rounds take twice.
 double Solver::projectTethers(Particles& p, const ClothTopology& topology) {
-  constexpr int kMaxRounds = 16;
   const std::vector<Tether>& tethers = topology.tethers;
   const std::size_t count = tethers.size();
-  // The most violated tether of [begin, end) at y, other than `skip`; -1 when none is violated.
-  // Anchors no longer kinematic (a released gripper, until the list is rebuilt) are ignored.
-  auto worst = [&](std::size_t begin, std::size_t end, const Vec3& y, std::size_t skip) {
-    int found = -1;
-    double largest = 0.0;
-    for (std::size_t t = begin; t < end; ++t) {
-      const Tether& tether = tethers[t];
-      if (t == skip || p.inverse_mass[tether.anchor] != 0.0) continue;
-      const double excess = (y - p.position[tether.anchor]).norm() - tether.max_length;
-      if (excess > tether.max_length * kTetherSlack && excess > largest) {
-        largest = excess;
-        found = static_cast<int>(t);
-      }
-    }
-    return found;
-  };
   double max_change = 0.0, max_change_squared = 0.0;
   AnchorAxis axis;  // anchors stay put during the pass
   std::size_t end = 0;
@@ -566,27 +549,9 @@ double Solver::projectTethers(Particles& p, const ClothTopology& topology) {
         first_round = 1;  // the rounds go on from the second, as they would have
       }
     }
-    for (int round = first_round; round < kMaxRounds; ++round) {
-      const int a = worst(begin, end, x, count);
-      if (a < 0) break;
-      const Tether& ta = tethers[a];
-      Vec3 projected = x;
-      const double moved = projectIntoBall(projected, p.position[ta.anchor], ta.max_length);
-      const int b = worst(begin, end, projected, static_cast<std::size_t>(a));
-      if (b < 0) {
-        // Only the particle moves: the anchor's reaction is the momentum it was given, reversed.
-        reaction_[ta.anchor] -= p.mass[particle] * (projected - x);
-        x = projected;
-        max_change = std::max(max_change, moved);
-        break;
-      }
-      const Tether& tb = tethers[b];
-      const Vec3 start = x;
-      max_change = std::max(max_change, projectIntoLens(x, p.position[ta.anchor], ta.max_length,
-                                                        p.position[tb.anchor], tb.max_length));
-      addLensReactions(start, x, p.mass[particle], p.position[ta.anchor], p.position[tb.anchor],
-                       reaction_[ta.anchor], reaction_[tb.anchor]);
-    }
+    max_change = std::max(
+        max_change, projectTetherRounds(x, p.mass[particle], &tethers[begin], tethers.data() + end,
+                                        p.position, p.inverse_mass, reaction_, first_round));
   }
   return std::max(max_change, std::sqrt(max_change_squared));
 }

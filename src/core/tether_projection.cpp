@@ -63,6 +63,26 @@ void lensReactions(const Vec3& move, double mass, const Vec3& to_a, double la, c
   reaction_b -= 0.5 * mass * move;
 }
 
+// The nearest point of the lens for an x that neither ball's own point serves, from the anchors'
+// axis (unit u from `first`, length `distance` >= kMinLength): on the circle where the spheres
+// meet, or, for balls that do not meet, the point of the axis that splits the excess in
+// proportion to the radii. Returns whether the point is on the circle (on both spheres).
+bool lensPoint(Vec3& x, const Vec3& first, double r_first, double r_second, const Vec3& u,
+               double distance) {
+  if (distance >= r_first + r_second) {
+    x = first + (r_first / (r_first + r_second) * distance) * u;
+    return false;
+  }
+  const double t =
+      (distance * distance + r_first * r_first - r_second * r_second) / (2.0 * distance);
+  const double rho = std::sqrt(std::max(0.0, r_first * r_first - t * t));
+  Vec3 radial = (x - first) - (x - first).dot(u) * u;
+  const double radial_length = radial.norm();
+  radial = radial_length > kMinLength ? Vec3(radial / radial_length) : u.unitOrthogonal();
+  x = first + t * u + rho * radial;
+  return true;
+}
+
 }  // namespace
 
 double projectIntoBall(Vec3& x, const Vec3& a, double r) {
@@ -95,17 +115,7 @@ double projectIntoLens(Vec3& x, const Vec3& a, double ra, const Vec3& b, double 
   const Vec3 axis = b - a;
   const double distance = axis.norm();
   if (distance < kMinLength) return 0.0;  // coincident anchors of different radii: nothing to do
-  const Vec3 u = axis / distance;
-  if (distance >= ra + rb) {
-    x = a + (ra / (ra + rb) * distance) * u;
-    return (x - start).norm();
-  }
-  const double t = (distance * distance + ra * ra - rb * rb) / (2.0 * distance);
-  const double rho = std::sqrt(std::max(0.0, ra * ra - t * t));
-  Vec3 radial = (x - a) - (x - a).dot(u) * u;
-  const double radial_length = radial.norm();
-  radial = radial_length > kMinLength ? Vec3(radial / radial_length) : u.unitOrthogonal();
-  x = a + t * u + rho * radial;
+  lensPoint(x, a, ra, rb, axis / distance, distance);
   return (x - start).norm();
 }
 
@@ -178,22 +188,12 @@ bool projectTetherPair(Vec3& x, double mass, const Vec3& a, double ra, const Vec
       axis.distance = (second - first).norm();
       axis.u = (second - first) / axis.distance;
     }
-    const double distance = axis.distance;
-    if (distance < kMinLength) return true;  // coincident anchors: every round leaves x there
-    const Vec3& u = axis.u;
-    if (distance >= r_first + r_second) {
-      x = first + (r_first / (r_first + r_second) * distance) * u;
-      addLensReactions(start, x, mass, first, second, reaction_first, reaction_second);
-    } else {
-      const double t =
-          (distance * distance + r_first * r_first - r_second * r_second) / (2.0 * distance);
-      const double rho = std::sqrt(std::max(0.0, r_first * r_first - t * t));
-      Vec3 radial = (x - first) - (x - first).dot(u) * u;
-      const double radial_length = radial.norm();
-      radial = radial_length > kMinLength ? Vec3(radial / radial_length) : u.unitOrthogonal();
-      x = first + t * u + rho * radial;
+    if (axis.distance < kMinLength) return true;  // coincident anchors: every round leaves x
+    if (lensPoint(x, first, r_first, r_second, axis.u, axis.distance)) {
       lensReactions(x - start, mass, x - first, r_first, x - second, r_second, reaction_first,
                     reaction_second);
+    } else {
+      addLensReactions(start, x, mass, first, second, reaction_first, reaction_second);
     }
   }
   moved_squared = (x - start).squaredNorm();
@@ -202,6 +202,48 @@ bool projectTetherPair(Vec3& x, double mass, const Vec3& a, double ra, const Vec
   // the slack: then the caller goes on with the rounds.
   double unused = 0.0;
   return !exceeds(x - a, ra, unused) && !exceeds(x - b, rb, unused);
+}
+
+double projectTetherRounds(Vec3& x, double mass, const Tether* first, const Tether* last,
+                           const Vec3Array& position, const std::vector<double>& inverse_mass,
+                           Vec3Array& reaction, int first_round) {
+  constexpr int kMaxRounds = 16;
+  // The most violated tether at y, other than `skip`; nullptr when none is violated. Anchors no
+  // longer kinematic (a released gripper, until the list is rebuilt) are ignored.
+  auto worst = [&](const Vec3& y, const Tether* skip) {
+    const Tether* found = nullptr;
+    double largest = 0.0;
+    for (const Tether* t = first; t != last; ++t) {
+      if (t == skip || inverse_mass[t->anchor] != 0.0) continue;
+      const double excess = (y - position[t->anchor]).norm() - t->max_length;
+      if (excess > t->max_length * kTetherSlack && excess > largest) {
+        largest = excess;
+        found = t;
+      }
+    }
+    return found;
+  };
+  double max_change = 0.0;
+  for (int round = first_round; round < kMaxRounds; ++round) {
+    const Tether* ta = worst(x, nullptr);
+    if (ta == nullptr) break;
+    Vec3 projected = x;
+    const double moved = projectIntoBall(projected, position[ta->anchor], ta->max_length);
+    const Tether* tb = worst(projected, ta);
+    if (tb == nullptr) {
+      // Only the particle moves: the anchor's reaction is the momentum it was given, reversed.
+      reaction[ta->anchor] -= mass * (projected - x);
+      x = projected;
+      max_change = std::max(max_change, moved);
+      break;
+    }
+    const Vec3 start = x;
+    max_change = std::max(max_change, projectIntoLens(x, position[ta->anchor], ta->max_length,
+                                                      position[tb->anchor], tb->max_length));
+    addLensReactions(start, x, mass, position[ta->anchor], position[tb->anchor],
+                     reaction[ta->anchor], reaction[tb->anchor]);
+  }
+  return max_change;
 }
 
 double projectTetherSingle(Vec3& x, double mass, const Vec3& a, double r, Vec3& reaction) {

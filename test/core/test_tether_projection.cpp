@@ -1,4 +1,4 @@
-// The two-tether shortcut (projectTetherPair) against the general rounds of
+// The two-tether shortcut (projectTetherPair) against the general rounds (projectTetherRounds) of
 // Solver::projectTethers it replaces for a particle with two kinematic anchors: the same position
 // to the bit on every kind of case (inside both balls, one ball violated, both, the lens's circle,
 // touching and disjoint balls, coincident anchors, coordinates far larger than the radii), the
@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <random>
+#include <vector>
 
 #include "pbd_cloth/tether_projection.h"
 
@@ -19,42 +20,17 @@ struct Pair {
   double ra = 0.0, rb = 0.0;
 };
 
-// The rounds of Solver::projectTethers for one particle with tethers to a and b (a listed first),
-// from round `first_round` on: a = the most violated; its ball's point; if that violates the other,
-// the lens.
+// The general rounds (projectTetherRounds, what Solver::projectTethers runs for any particle) for
+// one particle with tethers to a and b (a listed first), from round `first_round` on.
 void rounds(const Pair& pair, double mass, Vec3& x, Vec3& reaction_a, Vec3& reaction_b,
             int first_round) {
-  const Vec3* anchors[2] = {&pair.a, &pair.b};
-  const double radii[2] = {pair.ra, pair.rb};
-  Vec3* reactions[2] = {&reaction_a, &reaction_b};
-  auto worst = [&](const Vec3& y, int skip) {
-    int found = -1;
-    double largest = 0.0;
-    for (int t = 0; t < 2; ++t) {
-      if (t == skip) continue;
-      const double excess = (y - *anchors[t]).norm() - radii[t];
-      if (excess > radii[t] * kTetherSlack && excess > largest) {
-        largest = excess;
-        found = t;
-      }
-    }
-    return found;
-  };
-  for (int round = first_round; round < 16; ++round) {
-    const int a = worst(x, -1);
-    if (a < 0) return;
-    Vec3 projected = x;
-    projectIntoBall(projected, *anchors[a], radii[a]);
-    const int b = worst(projected, a);
-    if (b < 0) {
-      *reactions[a] -= mass * (projected - x);
-      x = projected;
-      return;
-    }
-    const Vec3 start = x;
-    projectIntoLens(x, *anchors[a], radii[a], *anchors[b], radii[b]);
-    addLensReactions(start, x, mass, *anchors[a], *anchors[b], *reactions[a], *reactions[b]);
-  }
+  const Vec3Array anchors = {pair.a, pair.b};
+  const std::vector<double> inverse_mass = {0.0, 0.0};  // both kinematic
+  const Tether tethers[2] = {{2, 0, pair.ra}, {2, 1, pair.rb}};
+  Vec3Array reactions = {reaction_a, reaction_b};
+  projectTetherRounds(x, mass, tethers, tethers + 2, anchors, inverse_mass, reactions, first_round);
+  reaction_a = reactions[0];
+  reaction_b = reactions[1];
 }
 
 // Anchors 0 to 1.6 (ra + rb) apart (disjoint balls from 1), the particle anywhere within 2.5 radii
