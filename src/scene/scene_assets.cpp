@@ -385,6 +385,21 @@ void loadRobotFrom(SceneConfig& scene, const std::string& urdf_xml, const std::s
     out.mimic_multiplier = joint->mimic->multiplier;
     out.mimic_offset = joint->mimic->offset;
   }
+  // Mimic joints that follow each other round in a circle (a joint mimicking itself included) have
+  // no position: refused here, by name, instead of reaching the forward kinematics (found by
+  // test/fuzz/fuzz_urdf).
+  for (std::size_t start = 0; start < model.joints.size(); ++start) {
+    std::string chain = model.joints[start].name;
+    int j = model.joints[start].mimic_joint;
+    for (std::size_t hops = 0; j >= 0; ++hops) {
+      chain += " -> " + model.joints[j].name;
+      // Back at the start, or (a chain that runs into a cycle elsewhere) longer than any path.
+      if (static_cast<std::size_t>(j) == start || hops >= model.joints.size()) {
+        throw ConfigError(source, "mimic joints form a cycle: " + chain);
+      }
+      j = model.joints[j].mimic_joint;
+    }
+  }
   // What urdfdom logged as errors while still returning a model (an element it dropped, such as
   // a visual with an unknown geometry) is passed on.
   if (!reason.empty()) scene.load_warnings.push_back(source + ": urdfdom: " + reason);

@@ -447,6 +447,24 @@ TEST(SceneAssets, BadUrdfInputNamesSourceLinkAndFile) {
   const std::string empty = robotErrorOf("", "robot_description");
   EXPECT_EQ(empty.rfind("robot_description: does not parse as URDF", 0), 0u) << empty;
 
+  // Mimic joints in a cycle (test/fuzz/fuzz_urdf found one that reached the forward kinematics
+  // and ended the process): refused at load, naming the joints. Two joints that mimic each
+  // other, and one that mimics itself.
+  auto twoJoints = [](const std::string& mimic_of_a, const std::string& mimic_of_b) {
+    auto joint = [](const std::string& name, const std::string& child, const std::string& mimic) {
+      return "<joint name='" + name + "' type='revolute'><parent link='base'/><child link='" +
+             child + "'/><axis xyz='0 0 1'/><limit lower='-1' upper='1' effort='1' velocity='1'/>" +
+             (mimic.empty() ? "" : "<mimic joint='" + mimic + "'/>") + "</joint>";
+    };
+    return "<robot name='r'><link name='base'/><link name='l1'/><link name='l2'/>" +
+           joint("a", "l1", mimic_of_a) + joint("b", "l2", mimic_of_b) + "</robot>";
+  };
+  const std::string mutual = robotErrorOf(twoJoints("b", "a"), "robot_description");
+  EXPECT_EQ(mutual.rfind("robot_description: mimic joints form a cycle: a -> b -> a", 0), 0u)
+      << mutual;
+  const std::string itself = robotErrorOf(twoJoints("", "b"), "robot_description");
+  EXPECT_EQ(itself.rfind("robot_description: mimic joints form a cycle: b -> b", 0), 0u) << itself;
+
   // Mesh files: missing, empty, unreadable, without triangles: the link and the file are named.
   struct Case {
     std::string file;
