@@ -14,8 +14,10 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
 #include <fstream>
 #include <string>
+#include <typeinfo>
 
 #include "pbd_cloth/simulation.h"
 
@@ -24,6 +26,26 @@ namespace fuzz {
 
 constexpr int kMaxSteppedParticles = 2000;
 constexpr int kMaxSteppedPasses = 200;  // substeps x iterations
+
+// An exception that escapes a target is a finding, and its input must be kept to replay it. It
+// ends the process through std::terminate and abort(), and run_fuzz leaves SIGABRT to the
+// sanitizers (-handle_abrt=0: assimp may abort in the mesh reader's child process, which reports
+// that as a ConfigError), so libFuzzer would not write the input out. This handler names the
+// exception and traps instead: libFuzzer handles SIGILL, writes the input to the artifacts
+// directory and reports a deadly signal. (The reader's child catches every exception itself.)
+[[noreturn]] inline void reportUncaughtException() {
+  try {
+    if (std::current_exception()) std::rethrow_exception(std::current_exception());
+    std::fprintf(stderr, "fuzz: std::terminate without an exception\n");
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "fuzz: uncaught exception %s: %s\n", typeid(e).name(), e.what());
+  } catch (...) {
+    std::fprintf(stderr, "fuzz: uncaught exception of a type not derived from std::exception\n");
+  }
+  __builtin_trap();
+}
+inline const std::terminate_handler kPreviousTerminateHandler =
+    std::set_terminate(reportUncaughtException);
 
 inline std::string text(const std::uint8_t* data, std::size_t size) {
   return std::string(reinterpret_cast<const char*>(data), size);
