@@ -271,6 +271,9 @@ struct CameraConfig {
   int seed = 0;            // cameras[i].seed: the noise's random stream (same seed, same noise)
 };
 
+// bounds: a box the particles are kept inside (the seed's C1). The cloth must start inside it:
+// validate() refuses a cloth with a particle outside, naming it (a cloth squeezed onto the box in
+// its first step would be a line of degenerate triangles).
 struct BoundsConfig {
   bool enabled = false;  // true when the scene has a `bounds` key
   Eigen::Vector3d min{-10.0, -10.0, -10.0};

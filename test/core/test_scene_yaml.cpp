@@ -508,6 +508,29 @@ TEST(SceneYaml, ObstacleShapeIsRequired) {
   EXPECT_EQ(what.rfind("obstacles[0].shape: required", 0), 0u) << what;
 }
 
+// fuzz_scene_yaml's find: a grid whose rows left the bounds along y was squeezed onto the box's
+// face in the first step, into a line of degenerate triangles whose self-collision search took
+// 1.8 s a step. Refused at load, naming the corner; a cloth laid exactly on a face still loads.
+TEST(SceneYaml, ClothOutsideTheBoundsIsRefused) {
+  const std::string bounds = "\nbounds: {min: [-1, 0, 0], max: [1, 1, 2]}";
+  const std::string what =
+      errorOf("cloth: {rows: 4, cols: 4, spacing: 0.1, origin: [0, 0, 1]}" + bounds);
+  EXPECT_EQ(what.rfind("bounds: the cloth must start inside the bounds: its corner particle "
+                       "(row 3, col 0) is at [0, -0.3, 1]",
+                       0),
+            0u)
+      << what;
+  EXPECT_EQ(errorOf("cloth: {rows: 4, cols: 4, spacing: 0.1, origin: [0, 0.5, 1]}" + bounds), "");
+  // Row 3 at y = 0.3 - 3 x 0.1, -5.6e-17 in doubles: on the face, within the slack.
+  EXPECT_EQ(errorOf("cloth: {rows: 4, cols: 4, spacing: 0.1, origin: [0, 0.3, 1]}" + bounds), "");
+  // Tilted out of the top of the box.
+  EXPECT_NE(errorOf("cloth: {rows: 4, cols: 4, spacing: 0.1, origin: [0, 0.5, 1.9], rpy: [-1.5, "
+                    "0, 0]}" +
+                    bounds)
+                .find("outside min"),
+            std::string::npos);
+}
+
 TEST(SceneYaml, NullSectionsReadAsAbsent) {
   const SceneConfig s = sceneFromYaml(YAML::Load("solver:\ncloth:\n  pinned:\nbounds:\n"));
   EXPECT_EQ(s.solver.substeps, SolverConfig().substeps);
