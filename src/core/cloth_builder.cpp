@@ -289,7 +289,7 @@ void placeMeshParticles(const ClothConfig& cloth, const ClothMesh& mesh, Particl
   const Eigen::Matrix3d rotation = rotationFromRpy(cloth.rpy);
   const int count = static_cast<int>(mesh.vertices.size());
   for (int i = 0; i < count; ++i) {
-    particles.position[i] = cloth.origin + rotation * (cloth.mesh_scale * mesh.vertices[i]);
+    particles.position[i] = meshStartPosition(cloth, rotation, mesh.vertices[i]);
     particles.mass[i] = 0.0;
     particles.radius[i] = cloth.thickness;
   }
@@ -357,8 +357,7 @@ void buildScene(const SceneConfig& scene, Particles& particles, ClothTopology& t
     for (int r = 0; r < cloth.rows; ++r) {
       for (int c = 0; c < cloth.cols; ++c) {
         const int i = r * cloth.cols + c;
-        particles.position[i] =
-            cloth.origin + rotation * Vec3(c * cloth.spacing, -r * cloth.spacing, 0.0);
+        particles.position[i] = gridStartPosition(cloth, rotation, r, c);
         particles.mass[i] = particle_mass;
         particles.radius[i] = cloth.thickness;
       }

@@ -449,14 +449,13 @@ void checkClothInsideBounds(const SceneConfig& scene) {
   if (cloth.mesh_data) {
     const Vec3Array& vertices = cloth.mesh_data->vertices;
     for (std::size_t i = 0; i < vertices.size(); ++i) {
-      check(cloth.origin + rotation * (cloth.mesh_scale * vertices[i]),
-            "vertex " + std::to_string(i));
+      check(meshStartPosition(cloth, rotation, vertices[i]), "vertex " + std::to_string(i));
     }
     return;
   }
   for (const int r : {0, cloth.rows - 1}) {
     for (const int c : {0, cloth.cols - 1}) {
-      check(cloth.origin + rotation * Eigen::Vector3d(c * cloth.spacing, -r * cloth.spacing, 0.0),
+      check(gridStartPosition(cloth, rotation, r, c),
             "corner particle (row " + std::to_string(r) + ", col " + std::to_string(c) + ")");
     }
   }
