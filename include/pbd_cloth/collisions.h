@@ -82,6 +82,9 @@ struct CollisionStats {
   int broad_phase_runs = 0;       // 1, plus one per new window and per substep whose particles
                                   // left their swept boxes
   int search_window = 0;          // substeps one search covered (solver.search_window)
+  int truncated_searches = 0;     // self-collision searches of the last step that stopped at
+                                  // their budget (SelfCollision::kPairsPerElement): a cloth
+                                  // crushed into itself, candidates skipped
 };
 
 class Collisions {

@@ -83,8 +83,18 @@ class SelfCollision {
   // cannot come within h before a particle leaves its path, which Collisions checks at every
   // substep (and then searches again): it is left out. It drops the neighbours of a cloth moving
   // as a whole, which the boxes alone list, where the tree's cones do not (a curved cloth).
+  // A budget bounds a search: it ends once it has found kPairsPerElement candidates per triangle
+  // and edge of the cloth, keeping those (the tree's order: the same for every run) and skipping
+  // the rest; lastSearchTruncated() says so. The shipped scenes and the tests need at most 4.3
+  // per element, a 10 x 10 cloth flung across itself at 52 m/s (test_allocations.cpp) 98; a
+  // 32 x 32 cloth crushed onto a line by a robot 57, onto a point 1279, which took 0.7 to 50 s
+  // a step before the budget: every vertex is then within h of hundreds of triangles, contacts
+  // no projection can satisfy anyway, and the node would stop keeping time for good.
+  static constexpr int kPairsPerElement = 16;
   void findPairs(const Particles& particles, const ClothTopology& topology,
                  const MotionBounds& bounds, double thickness, bool edge_pairs, bool keep_states);
+  // Whether the last findPairs stopped at its budget (candidates skipped).
+  bool lastSearchTruncated() const { return truncated_; }
 
   // Pre-stabilisation: pushes contacts closer than h by more than the slop (a fraction of h) apart
   // by at most max_shift, on the positions before the step's first prediction (no velocity).
@@ -148,6 +158,8 @@ class SelfCollision {
   Vec3Array edge_lo_;  // edge boxes: the union of their two vertices' grown boxes
   Vec3Array edge_hi_;
   std::size_t reserved_pairs_ = 0;      // capacity reserve() gave pairs_ and previous_
+  std::size_t pair_budget_ = 0;         // kPairsPerElement (triangles + edges) per search
+  bool truncated_ = false;              // lastSearchTruncated
   std::vector<SelfContactPair> pairs_;  // edge-edge pairs first, then vertex-triangle pairs
   int edge_pair_count_ = 0;
   std::vector<SelfContactPair> previous_;      // the pairs a search within the step replaces

@@ -75,9 +75,11 @@ class TriangleTree {
   // with itself) whose boxes overlap and that no flat patch holds: a connected node whose cone's
   // cosine is at least cos_flat is skipped, and so is a pair of connected nodes that share a
   // vertex and whose cones together are that narrow. cos_flat > 1 skips nothing.
+  // visit returns false to end the traversal there (a search over its budget); forEachLeafPair
+  // then returns false, and true when it visited every such pair.
   template <class Visit>
-  void forEachLeafPair(double cos_flat, Visit&& visit) const {
-    if (!nodes_.empty()) selfPairs(0, cos_flat, visit);
+  bool forEachLeafPair(double cos_flat, Visit&& visit) const {
+    return nodes_.empty() || selfPairs(0, cos_flat, visit);
   }
 
   // cos(theta) of the flatness bound for thickness h (header comment): max(2 h / g, 0.5), or 2
@@ -94,34 +96,27 @@ class TriangleTree {
   bool share(const Node& a, const Node& b) const;
   bool flatTogether(const Node& a, const Node& b, double cos_flat) const;
 
+  // Both return false once visit has asked to stop.
   template <class Visit>
-  void selfPairs(int k, double cos_flat, Visit& visit) const {
+  bool selfPairs(int k, double cos_flat, Visit& visit) const {
     const Node& n = nodes_[k];
-    if (n.connected && n.cos_angle >= cos_flat) return;
-    if (n.left < 0) {
-      visit(k, k);
-      return;
-    }
-    selfPairs(n.left, cos_flat, visit);
-    selfPairs(n.right, cos_flat, visit);
-    crossPairs(n.left, n.right, cos_flat, visit);
+    if (n.connected && n.cos_angle >= cos_flat) return true;
+    if (n.left < 0) return visit(k, k);
+    return selfPairs(n.left, cos_flat, visit) && selfPairs(n.right, cos_flat, visit) &&
+           crossPairs(n.left, n.right, cos_flat, visit);
   }
   template <class Visit>
-  void crossPairs(int i, int j, double cos_flat, Visit& visit) const {
+  bool crossPairs(int i, int j, double cos_flat, Visit& visit) const {
     const Node& a = nodes_[i];
     const Node& b = nodes_[j];
-    if (!boxesOverlap(a.lo, a.hi, b.lo, b.hi)) return;
-    if (a.connected && b.connected && flatTogether(a, b, cos_flat) && share(a, b)) return;
+    if (!boxesOverlap(a.lo, a.hi, b.lo, b.hi)) return true;
+    if (a.connected && b.connected && flatTogether(a, b, cos_flat) && share(a, b)) return true;
     const bool a_leaf = a.left < 0, b_leaf = b.left < 0;
-    if (a_leaf && b_leaf) {
-      visit(i, j);
-    } else if (a_leaf || (!b_leaf && b.count > a.count)) {
-      crossPairs(i, b.left, cos_flat, visit);
-      crossPairs(i, b.right, cos_flat, visit);
-    } else {
-      crossPairs(a.left, j, cos_flat, visit);
-      crossPairs(a.right, j, cos_flat, visit);
+    if (a_leaf && b_leaf) return visit(i, j);
+    if (a_leaf || (!b_leaf && b.count > a.count)) {
+      return crossPairs(i, b.left, cos_flat, visit) && crossPairs(i, b.right, cos_flat, visit);
     }
+    return crossPairs(a.left, j, cos_flat, visit) && crossPairs(a.right, j, cos_flat, visit);
   }
 
   std::vector<Node> nodes_;

@@ -211,6 +211,7 @@ void Collisions::findCandidates(const Particles& particles, const ClothTopology&
   stats_.vertex_triangle_pairs =
       self_collision ? self_collision_pairs_.vertexTrianglePairCount() : 0;
   stats_.edge_edge_pairs = self_collision ? self_collision_pairs_.edgeEdgePairCount() : 0;
+  if (self_collision && self_collision_pairs_.lastSearchTruncated()) ++stats_.truncated_searches;
   ++stats_.broad_phase_runs;
   ++searches_in_step_;
 }
@@ -238,6 +239,7 @@ void Collisions::beginStep(Particles& particles, const ClothTopology& topology, 
   dt_ = dt;
   ++step_;
   stats_.broad_phase_runs = 0;
+  stats_.truncated_searches = 0;
   checked_substep_ = -1;
   std::fill(kinematic_reaction_.begin(), kinematic_reaction_.end(), Vec3::Zero());
   for (std::size_t k = 0; k < obstacles_.size(); ++k) {

@@ -262,6 +262,7 @@ void SelfCollision::reserve(const Particles& particles, const ClothTopology& top
   // needs more: the list then grows in that step, and releaseExcessCapacity gives the excess
   // back between steps once it is over.
   reserved_pairs_ = 8 * static_cast<std::size_t>(triangles + edges);
+  pair_budget_ = kPairsPerElement * static_cast<std::size_t>(triangles + edges);
   pairs_.reserve(reserved_pairs_);
   previous_.reserve(reserved_pairs_);
   vertex_found_.reserve(reserved_pairs_);
@@ -293,6 +294,7 @@ void SelfCollision::findPairs(const Particles& p, const ClothTopology& topology,
   if (edge_pairs) edge_pair_count_ = 0;
   vertex_found_.clear();
   edge_found_.clear();
+  truncated_ = false;
   const int triangles = topology.triangleCount();
   if (triangles == 0) return;
   // Vertex boxes grown by h / 2: two boxes built from them overlap when within h of each other.
@@ -323,8 +325,11 @@ void SelfCollision::findPairs(const Particles& p, const ClothTopology& topology,
     }
   }
   tree_.refit(tri, triangle_lo_, triangle_hi_, bounds.path_start, bounds.path_move);
-  tree_.forEachLeafPair(tree_.cosFlat(thickness), [&](int a, int b) {
+  // The budget is checked between leaf pairs: a search keeps at most one leaf pair's candidates
+  // beyond it.
+  truncated_ = !tree_.forEachLeafPair(tree_.cosFlat(thickness), [&](int a, int b) {
     findLeafPairs(a, b, p, topology, bounds, thickness, edge_pairs);
+    return vertex_found_.size() + edge_found_.size() < pair_budget_;
   });
   // Each kind by its first particle (counting sort; a particle's pairs in the order the traversal
   // found them): the order carryStates bisects.

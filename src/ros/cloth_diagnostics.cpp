@@ -54,8 +54,12 @@ void ClothDiagnostics::simulationStatus(diagnostic_updater::DiagnosticStatusWrap
   } else if (health_.time_source == TimeSource::kWallClock && (slow_rate || slow_steps)) {
     status.summaryf(DiagnosticStatus::WARN,
                     "cannot keep real time: real-time factor %.2f, a step takes %.1f ms for a "
-                    "period of %.1f ms (lower step_rate, substeps or the cloth size)",
-                    health_.real_time_factor, 1e3 * mean_step, 1e3 * health_.step_period);
+                    "period of %.1f ms (%s)",
+                    health_.real_time_factor, 1e3 * mean_step, 1e3 * health_.step_period,
+                    health_.truncated_searches > 0
+                        ? "the cloth is crushed into itself: self-collision searches hit their "
+                          "candidate budget"
+                        : "lower step_rate, substeps or the cloth size");
   } else if (health_.time_source == TimeSource::kRosClock && slow_clock) {
     // /clock may run at any speed: what matters is whether the steps keep up with it.
     status.summaryf(DiagnosticStatus::WARN,
@@ -67,6 +71,12 @@ void ClothDiagnostics::simulationStatus(diagnostic_updater::DiagnosticStatusWrap
     status.summaryf(DiagnosticStatus::WARN,
                     "%d stretch constraint(s) skipped in the last step: their particles coincide",
                     health_.degenerate_constraints);
+  } else if (health_.truncated_searches > 0) {
+    status.summaryf(DiagnosticStatus::WARN,
+                    "%d self-collision search(es) since the last report stopped at their "
+                    "candidate budget: the cloth is crushed into itself, some of its self-contacts "
+                    "skipped",
+                    health_.truncated_searches);
   } else if (health_.time_source == TimeSource::kRosClock) {
     status.summary(DiagnosticStatus::OK, "keeping up with /clock");
   } else if (health_.time_source == TimeSource::kOwnClock) {
@@ -89,6 +99,7 @@ void ClothDiagnostics::simulationStatus(diagnostic_updater::DiagnosticStatusWrap
   status.add("max strain", health_.max_strain);
   status.add("max penetration (m)", health_.max_penetration);
   status.add("degenerate constraints (last step)", health_.degenerate_constraints);
+  status.add("truncated self-collision searches (since last report)", health_.truncated_searches);
   status.add("restored steps", health_.restored_steps);
   status.add("last fault", health_.last_fault);
   if (health_.has_cameras) {

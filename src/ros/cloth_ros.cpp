@@ -500,6 +500,7 @@ void ClothRos::stepOnce() {
   }
   diagnostics_->addStep(sim_->stats().step_wall_time);
   warnAboutDegenerateConstraints();
+  warnAboutTruncatedSearches();
 
   if (sim_->stats().step_wall_time > period) {
     ROS_WARN_THROTTLE(10.0,
@@ -553,6 +554,21 @@ void ClothRos::warnAboutDegenerateConstraints() {
                     stats.degenerate_constraints, stats.first_degenerate_constraint, con.i, con.j);
 }
 
+// A cloth crushed into itself (squeezed by a gripper onto a line or a point) puts every vertex
+// within the thickness of hundreds of triangles: the self-collision search stops at its budget
+// and skips the rest (SelfCollision::kPairsPerElement), so that the node keeps stepping.
+void ClothRos::warnAboutTruncatedSearches() {
+  const int truncated = sim_->collisions().stats().truncated_searches;
+  if (truncated == 0) return;
+  truncated_searches_since_report_ += truncated;
+  ROS_WARN_THROTTLE(5.0,
+                    "%d self-collision search(es) in the last step stopped at their budget of %d "
+                    "candidates per triangle and edge: the cloth is crushed into itself, and "
+                    "self-contacts beyond the budget were skipped. Counted in ~state "
+                    "stats.truncated_self_collision_searches.",
+                    truncated, SelfCollision::kPairsPerElement);
+}
+
 void ClothRos::publishOutputs() {
   if (!allFinite(sim_->particles())) {
     // Publishing would hand NaNs to every consumer; the diagnostics report the error too.
@@ -604,6 +620,8 @@ void ClothRos::diagnosticsCallback(const ros::WallTimerEvent& /*event*/) {
   health.max_strain = stats.max_strain;
   health.max_penetration = stats.max_penetration;
   health.degenerate_constraints = static_cast<int>(stats.degenerate_constraints);
+  health.truncated_searches = truncated_searches_since_report_;
+  truncated_searches_since_report_ = 0;
   health.finite = allFinite(sim_->particles());
   health.restored_steps = sim_->restoredSteps();
   if (health.restored_steps > 0) {

@@ -101,6 +101,8 @@ void RosConversions::toStatsMessage(const Simulation& sim, SolverStats& msg) {
   msg.mean_strain = stats.mean_strain;
   msg.max_penetration = stats.max_penetration;
   msg.degenerate_constraints = static_cast<std::uint32_t>(stats.degenerate_constraints);
+  msg.truncated_self_collision_searches =
+      static_cast<std::uint32_t>(sim.collisions().stats().truncated_searches);
   msg.restored_steps = static_cast<std::uint32_t>(sim.restoredSteps());
   msg.real_time_factor = 0.0;
   msg.rejected_inputs = 0;

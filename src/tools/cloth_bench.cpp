@@ -28,7 +28,9 @@ const char kUsage[] =
     "max_penetration self_intersections energy finite steps sim_time iterations_per_step\n"
     "predict_ms collide_ms project_ms update_ms contact_ms broad_phase_runs\n"
     "vertex_triangle_pairs edge_edge_pairs (self-collision candidates per step) search_window\n"
-    "(substeps per contact search, mean over the steps) method substeps\n"
+    "(substeps per contact search, mean over the steps) truncated_searches (self-collision\n"
+    "searches of the run that stopped at their candidate budget: a cloth crushed into itself)\n"
+    "method substeps\n"
     "iterations ...).\n"
     "Only the step calls are timed (cpu_ms_per_step: their processor time, which leaves out\n"
     "waiting for a core on a shared machine). max_strain, max_penetration and "
@@ -179,6 +181,9 @@ struct BenchResult {
   // Self-collision candidates per step (the last broad phase of each step), mean over the run.
   double vertex_triangle_pairs = 0.0, edge_edge_pairs = 0.0;
   double search_window = 0.0;  // substeps per contact search, mean over the steps
+  // Self-collision searches over the run that stopped at their candidate budget (a cloth crushed
+  // into itself; SelfCollision::kPairsPerElement): 0 in every shipped scene.
+  long long truncated_searches = 0;
   int particles = 0;
   int sample_every = 1;
   double depth_ms = -1.0;  // --depth: mean time to render one image; < 0: not asked
@@ -275,6 +280,7 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
   long long broad_phase_runs = 0;
   long long vertex_triangle_pairs = 0, edge_edge_pairs = 0;
   long long search_window = 0;
+  long long truncated_searches = 0;
   long long iterations = 0;
   long long done = 0;
   double asleep_seconds = 0.0, awake_seconds = 0.0;
@@ -306,6 +312,7 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
     vertex_triangle_pairs += sim.collisions().stats().vertex_triangle_pairs;
     edge_edge_pairs += sim.collisions().stats().edge_edge_pairs;
     search_window += sim.collisions().stats().search_window;
+    truncated_searches += sim.collisions().stats().truncated_searches;
     iterations += stats.iterations;
     if (done % result.sample_every != 0 && done != steps) continue;
     last = sim.computeMetrics();
@@ -348,6 +355,7 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
   result.vertex_triangle_pairs = static_cast<double>(vertex_triangle_pairs) * per_step;
   result.edge_edge_pairs = static_cast<double>(edge_edge_pairs) * per_step;
   result.search_window = static_cast<double>(search_window) * per_step;
+  result.truncated_searches = truncated_searches;
   return result;
 }
 
@@ -361,7 +369,8 @@ void printResult(const pbd_cloth::SceneConfig& scene, const BenchResult& r) {
       "sample_every=%d final_max_strain=%.9g ordering=%s contact_ms=%.6g broad_phase_runs=%.6g "
       "final_structural_max_strain=%.9g final_structural_mean_strain=%.9g cpu_ms_per_step=%.6g "
       "asleep_steps=%lld asleep_ms_per_step=%.6g awake_ms_per_step=%.6g "
-      "vertex_triangle_pairs=%.6g edge_edge_pairs=%.6g search_window=%.6g",
+      "vertex_triangle_pairs=%.6g edge_edge_pairs=%.6g search_window=%.6g "
+      "truncated_searches=%lld",
       r.wall_ms_per_step, r.max_strain, last.mean_strain, r.max_penetration,
       last.self_intersections, last.energy, last.finite ? 1 : 0, r.steps, r.sim_time,
       r.iterations_per_step, r.predict_ms, r.collide_ms, r.project_ms, r.update_ms,
@@ -370,7 +379,7 @@ void printResult(const pbd_cloth::SceneConfig& scene, const BenchResult& r) {
       pbd_cloth::toString(scene.solver.ordering), r.contact_ms, r.broad_phase_runs,
       last.structural_max_strain, last.structural_mean_strain, r.cpu_ms_per_step, r.asleep_steps,
       r.asleep_ms_per_step, r.awake_ms_per_step, r.vertex_triangle_pairs, r.edge_edge_pairs,
-      r.search_window);
+      r.search_window, r.truncated_searches);
   if (r.depth_ms >= 0.0) std::printf(" depth_ms=%.6g", r.depth_ms);
   std::printf("\n");
 }

@@ -72,10 +72,11 @@ TEST_P(FoldWithSearchWindow, NeverIntersects) {
   scene.solver.search_window = GetParam();
   Simulation sim(scene);
   ASSERT_EQ(sim.gripperCount(), 2);
-  int worst = 0, worst_step = -1;
+  int worst = 0, worst_step = -1, truncated = 0;
   double deepest = 0.0;
   for (int k = 0; k < 240; ++k) {
     sim.step();
+    truncated += sim.collisions().stats().truncated_searches;
     const int count = countSelfIntersections(sim.particles(), sim.topology());
     if (count > worst) {
       worst = count;
@@ -88,6 +89,7 @@ TEST_P(FoldWithSearchWindow, NeverIntersects) {
   std::printf("fold: max self-intersections %d (step %d), max penetration %.2e m\n", worst,
               worst_step, deepest);
   EXPECT_EQ(worst, 0);
+  EXPECT_EQ(truncated, 0);  // a fold is far from the search's budget (CrushedCloth... below)
   EXPECT_TRUE(sim.computeMetrics().finite);
   EXPECT_LT((p.position[15] - Vec3(0.0, 0.01, 0.5)).norm(), 1e-9);  // held by the right gripper
   EXPECT_LT((p.position[0] - Vec3(0.0, 0.0, 0.5)).norm(), 1e-9);
@@ -189,6 +191,42 @@ TEST(SelfCollision, DropOntoThinRodNeverIntersects) {
   EXPECT_LT(lowest, -0.04);
   EXPECT_GT(lowest, -0.16);
   EXPECT_TRUE(sim.computeMetrics().finite);
+}
+
+// A cloth crushed into itself (what a gripper squeezing it onto a line or into a fist does, here
+// every particle set within 0.1 mm of one point): every vertex is within the thickness of every
+// triangle, 363,000 candidates for this 16 x 16 cloth, which made a step of a 32 x 32 cloth
+// take 50 s. The search stops at its budget (SelfCollision::kPairsPerElement per triangle and
+// edge), says so in the stats, and the step goes on; the budget is what it lists at most (one
+// search's edge-edge pairs and one's vertex-triangle pairs, each over by at most a leaf pair's
+// candidates: 16 triangle pairs, 96 vertex-triangle and 144 edge-edge candidates). Before the
+// crush, the same cloth is far from it.
+TEST(SelfCollision, CrushedClothStopsEachSearchAtItsBudget) {
+  SceneConfig scene = test::clothScene(16, 16, 0.02, Method::kXpbd);
+  scene.cloth.self_collision = true;
+  scene.cloth.thickness = 0.004;
+  scene.cloth.pinned.clear();
+  Simulation sim(scene);
+  sim.step();
+  EXPECT_EQ(sim.collisions().stats().truncated_searches, 0) << "the flat cloth";
+  const int triangles = sim.topology().triangleCount();
+  const int edges = 3 * 15 * 15 + 2 * 15;  // rows, columns and one diagonal per cell
+  const int budget = SelfCollision::kPairsPerElement * (triangles + edges);
+  Particles& p = sim.mutableParticles();
+  for (int i = 0; i < p.cloth_count; ++i) {
+    p.position[i] = Vec3(0.1, -0.1, 0.5) + 1e-4 * Vec3(i % 7, i % 5, i % 3) / 7.0;
+    p.velocity[i].setZero();
+  }
+  int truncated = 0;
+  for (int k = 0; k < 3; ++k) {
+    sim.step();
+    const CollisionStats& stats = sim.collisions().stats();
+    truncated += stats.truncated_searches;
+    EXPECT_LE(stats.edge_edge_pairs, budget + 144) << "step " << k;
+    EXPECT_LE(stats.vertex_triangle_pairs, budget + 96) << "step " << k;
+    EXPECT_TRUE(sim.computeMetrics().finite) << "step " << k;
+  }
+  EXPECT_GT(truncated, 0);
 }
 
 // A free cloth made of `mesh` at 1 m, thickness h, with self-collision.

@@ -40,6 +40,9 @@ struct SimulationHealth {
   double max_strain = 0.0;
   double max_penetration = 0.0;    // m
   int degenerate_constraints = 0;  // skipped in the last step (coincident particles)
+  // Self-collision searches since the last report that stopped at their candidate budget (a
+  // cloth crushed into itself; SelfCollision::kPairsPerElement).
+  int truncated_searches = 0;
   bool finite = true;
   // Steps undone by fault recovery since start, and the latest one's fault (Simulation).
   std::uint64_t restored_steps = 0;
