@@ -17,10 +17,11 @@ ClothDiagnostics::ClothDiagnostics(const ros::NodeHandle& nh, const ros::NodeHan
   updater_.add("inputs", this, &ClothDiagnostics::inputStatus);
 }
 
-void ClothDiagnostics::addStep(double step_wall_time) {
+void ClothDiagnostics::addStep(double step_wall_time, int truncated_searches) {
   ++step_count_;
   step_time_sum_ += step_wall_time;
   step_time_max_ = std::max(step_time_max_, step_wall_time);
+  truncated_searches_ += truncated_searches;
 }
 
 void ClothDiagnostics::report(const SimulationHealth& health, const InputRejections& rejections) {
@@ -31,6 +32,7 @@ void ClothDiagnostics::report(const SimulationHealth& health, const InputRejecti
   step_count_ = 0;
   step_time_sum_ = 0.0;
   step_time_max_ = 0.0;
+  truncated_searches_ = 0;
 }
 
 void ClothDiagnostics::simulationStatus(diagnostic_updater::DiagnosticStatusWrapper& status) {
@@ -56,7 +58,7 @@ void ClothDiagnostics::simulationStatus(diagnostic_updater::DiagnosticStatusWrap
                     "cannot keep real time: real-time factor %.2f, a step takes %.1f ms for a "
                     "period of %.1f ms (%s)",
                     health_.real_time_factor, 1e3 * mean_step, 1e3 * health_.step_period,
-                    health_.truncated_searches > 0
+                    truncated_searches_ > 0
                         ? "the cloth is crushed into itself: self-collision searches hit their "
                           "candidate budget"
                         : "lower step_rate, substeps or the cloth size");
@@ -71,12 +73,12 @@ void ClothDiagnostics::simulationStatus(diagnostic_updater::DiagnosticStatusWrap
     status.summaryf(DiagnosticStatus::WARN,
                     "%d stretch constraint(s) skipped in the last step: their particles coincide",
                     health_.degenerate_constraints);
-  } else if (health_.truncated_searches > 0) {
+  } else if (truncated_searches_ > 0) {
     status.summaryf(DiagnosticStatus::WARN,
                     "%d self-collision search(es) since the last report stopped at their "
                     "candidate budget: the cloth is crushed into itself, some of its self-contacts "
                     "skipped",
-                    health_.truncated_searches);
+                    truncated_searches_);
   } else if (health_.time_source == TimeSource::kRosClock) {
     status.summary(DiagnosticStatus::OK, "keeping up with /clock");
   } else if (health_.time_source == TimeSource::kOwnClock) {
@@ -99,7 +101,7 @@ void ClothDiagnostics::simulationStatus(diagnostic_updater::DiagnosticStatusWrap
   status.add("max strain", health_.max_strain);
   status.add("max penetration (m)", health_.max_penetration);
   status.add("degenerate constraints (last step)", health_.degenerate_constraints);
-  status.add("truncated self-collision searches (since last report)", health_.truncated_searches);
+  status.add("truncated self-collision searches (since last report)", truncated_searches_);
   status.add("restored steps", health_.restored_steps);
   status.add("last fault", health_.last_fault);
   if (health_.has_cameras) {

@@ -498,7 +498,8 @@ void ClothRos::stepOnce() {
   if (!config_.publish_clock) {
     clock_factor_.add(ros::Time::now().toSec(), sim_->time());
   }
-  diagnostics_->addStep(sim_->stats().step_wall_time);
+  diagnostics_->addStep(sim_->stats().step_wall_time,
+                        sim_->collisions().stats().truncated_searches);
   warnAboutDegenerateConstraints();
   warnAboutTruncatedSearches();
 
@@ -560,7 +561,6 @@ void ClothRos::warnAboutDegenerateConstraints() {
 void ClothRos::warnAboutTruncatedSearches() {
   const int truncated = sim_->collisions().stats().truncated_searches;
   if (truncated == 0) return;
-  truncated_searches_since_report_ += truncated;
   ROS_WARN_THROTTLE(5.0,
                     "%d self-collision search(es) in the last step stopped at their budget of %d "
                     "candidates per triangle and edge: the cloth is crushed into itself, and "
@@ -620,8 +620,6 @@ void ClothRos::diagnosticsCallback(const ros::WallTimerEvent& /*event*/) {
   health.max_strain = stats.max_strain;
   health.max_penetration = stats.max_penetration;
   health.degenerate_constraints = static_cast<int>(stats.degenerate_constraints);
-  health.truncated_searches = truncated_searches_since_report_;
-  truncated_searches_since_report_ = 0;
   health.finite = allFinite(sim_->particles());
   health.restored_steps = sim_->restoredSteps();
   if (health.restored_steps > 0) {

@@ -23,6 +23,7 @@ using pbd_cloth_test::callService;
 using pbd_cloth_test::node;
 using pbd_cloth_test::Recorder;
 using pbd_cloth_test::StateRecorder;
+using pbd_cloth_test::warnsWith;
 
 bool setState(const pbd_cloth::SimState& state) {
   pbd_cloth::SetState set;
@@ -66,17 +67,8 @@ TEST(CrushedCloth, SearchStopsAtItsBudgetIsCountedAndWarnedAndTheNodeKeepsSteppi
   // a second), so a crush shorter than that shows too.
   const std::string name = node().substr(1) + ": simulation";
   diagnostic_msgs::DiagnosticArray report;
-  EXPECT_TRUE(diagnostics.waitFrom(
-      reports_before_crush, report, 5.0,
-      [&](const diagnostic_msgs::DiagnosticArray& m) {
-        for (const auto& status : m.status) {
-          if (status.name == name && status.level == diagnostic_msgs::DiagnosticStatus::WARN &&
-              status.message.find("crushed into itself") != std::string::npos) {
-            return true;
-          }
-        }
-        return false;
-      }))
+  EXPECT_TRUE(diagnostics.waitFrom(reports_before_crush, report, 5.0,
+                                   warnsWith(name, "crushed into itself")))
       << "no WARN '" << name << "' saying the cloth is crushed into itself; its reports:" << [&] {
            std::string seen;
            for (const auto& m : diagnostics.since(reports_before_crush)) {

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include <diagnostic_msgs/DiagnosticArray.h>
 #include <geometry_msgs/PoseStamped.h>
 #include <gtest/gtest.h>
 #include <ros/ros.h>
@@ -140,6 +141,21 @@ class Recorder {
 };
 
 using StateRecorder = Recorder<pbd_cloth::ClothState>;
+
+// For Recorder<diagnostic_msgs::DiagnosticArray>::waitForNext / waitFrom: a report whose status
+// `name` is a WARN with `text` in its message.
+inline std::function<bool(const diagnostic_msgs::DiagnosticArray&)> warnsWith(
+    const std::string& name, const std::string& text) {
+  return [name, text](const diagnostic_msgs::DiagnosticArray& report) {
+    for (const auto& status : report.status) {
+      if (status.name == name && status.level == diagnostic_msgs::DiagnosticStatus::WARN &&
+          status.message.find(text) != std::string::npos) {
+        return true;
+      }
+    }
+    return false;
+  };
+}
 
 template <typename Service>
 bool callService(const std::string& name, Service& service, double timeout = 10.0) {

@@ -17,6 +17,7 @@ using pbd_cloth::ClothState;
 using pbd_cloth_test::node;
 using pbd_cloth_test::Recorder;
 using pbd_cloth_test::StateRecorder;
+using pbd_cloth_test::warnsWith;
 
 TEST(SlowNode, SlowsDownKeepsPublishingAndWarns) {
   StateRecorder states(node() + "/state");
@@ -24,17 +25,7 @@ TEST(SlowNode, SlowsDownKeepsPublishingAndWarns) {
 
   const std::string name = node().substr(1) + ": simulation";
   diagnostic_msgs::DiagnosticArray msg;
-  EXPECT_TRUE(diagnostics.waitForNext(
-      msg, 20.0,
-      [&](const diagnostic_msgs::DiagnosticArray& m) {
-        for (const auto& status : m.status) {
-          if (status.name == name && status.level == diagnostic_msgs::DiagnosticStatus::WARN &&
-              status.message.find("cannot keep real time") != std::string::npos) {
-            return true;
-          }
-        }
-        return false;
-      }))
+  EXPECT_TRUE(diagnostics.waitForNext(msg, 20.0, warnsWith(name, "cannot keep real time")))
       << "no WARN 'cannot keep real time' in status '" << name << "'";
 
   // Still publishing, the simulated time still advancing, slower than the wall clock.

@@ -40,9 +40,6 @@ struct SimulationHealth {
   double max_strain = 0.0;
   double max_penetration = 0.0;    // m
   int degenerate_constraints = 0;  // skipped in the last step (coincident particles)
-  // Self-collision searches since the last report that stopped at their candidate budget (a
-  // cloth crushed into itself; SelfCollision::kPairsPerElement).
-  int truncated_searches = 0;
   bool finite = true;
   // Steps undone by fault recovery since start, and the latest one's fault (Simulation).
   std::uint64_t restored_steps = 0;
@@ -68,9 +65,11 @@ class ClothDiagnostics {
   ClothDiagnostics(const ros::NodeHandle& nh, const ros::NodeHandle& nh_private,
                    const std::string& node_name, const Config& config);
 
-  // Every step: its wall time (s).
-  void addStep(double step_wall_time);
-  // Publishes both statuses now; the step times gathered since the previous report are reset.
+  // Every step: its wall time (s) and its self-collision searches that stopped at their candidate
+  // budget (a cloth crushed into itself; SelfCollision::kPairsPerElement).
+  void addStep(double step_wall_time, int truncated_searches);
+  // Publishes both statuses now; the step figures gathered since the previous report are reset
+  // (a crush shorter than the report period still shows).
   void report(const SimulationHealth& health, const InputRejections& rejections);
   // s between reports (the updater's ~diagnostic_period, 1 s by default).
   double period() { return updater_.getPeriod(); }
@@ -85,10 +84,11 @@ class ClothDiagnostics {
   SimulationHealth health_;
   const InputRejections* rejections_ = nullptr;
   std::uint64_t restored_at_last_report_ = 0;
-  // Step wall times since the previous report.
+  // Step wall times and truncated self-collision searches since the previous report.
   int step_count_ = 0;
   double step_time_sum_ = 0.0;
   double step_time_max_ = 0.0;
+  int truncated_searches_ = 0;
   std::uint32_t rejected_at_last_report_ = 0;
 };
 

@@ -219,9 +219,6 @@ class ClothRos {
   PublishTicks publish_ticks_;
   bool waiting_for_clock_ = false;  // logged that no /clock has arrived yet
   RealTimeFactor real_time_factor_;
-  // Self-collision searches that stopped at their budget since the last diagnostics report (a
-  // crush shorter than the report period still shows there).
-  int truncated_searches_since_report_ = 0;
   // Simulated s per s of ROS time, for the diagnostics under /use_sim_time: whether the steps
   // keep up with /clock.
   RealTimeFactor clock_factor_;
