@@ -81,6 +81,8 @@ struct CollisionStats {
   int edge_edge_pairs = 0;        // self-collision candidates: two edges near each other
   int broad_phase_runs = 0;       // 1, plus one per new window and per substep whose particles
                                   // left their swept boxes
+  int local_searches = 0;         // searches for a few particles that left their bounds
+                                  // (SelfCollision::findPairsNear), not counted above
   int search_window = 0;          // substeps one search covered (solver.search_window)
   int truncated_searches = 0;     // self-collision searches of the last step that stopped at
                                   // their budget (SelfCollision::kPairsPerElement): a cloth
@@ -179,7 +181,16 @@ class Collisions {
                       bool window_start);
   // Whether a particle left its swept box or (with `paths`: self-collision is active) a cloth
   // particle its reference path: the search's candidates then no longer cover every contact.
-  bool leftMotionBounds(const Particles& particles, bool paths) const;
+  // Lists them in leavers_, up to kMaxLocalLeavers of every 1024 particles and one more (then
+  // too many for a local search); returns how many it listed.
+  int leftMotionBounds(const Particles& particles, bool paths);
+  // Particle i's swept box and reference path (computeSweptBoxes), `mid_step` after predict().
+  void sweepParticle(const Particles& particles, int i, double box_time, double path_time,
+                     bool mid_step);
+  // The search within a window when only the particles of leavers_ left their bounds: every path
+  // re-expressed from this substep's end, theirs set anew, and only their part of the
+  // self-collision candidates searched again (SelfCollision::findPairsNear).
+  void searchNear(const Particles& particles, const ClothTopology& topology);
   void preStabilizeObstacles(Particles& particles, double max_shift);
   // first_pass: the substep's first pass, in which no contact has pushed yet.
   double projectObstaclesAndBounds(Particles& particles, bool first_pass);
@@ -235,6 +246,7 @@ class Collisions {
   Vec3Array path_start_;
   Vec3Array path_move_;
   double path_fraction_ = 0.0;
+  std::vector<int> leavers_;  // leftMotionBounds
   // The search window: the setting (0: adaptive), the substeps of a step, the window of this
   // step (substeps, and as a fraction of the step) and the fraction at which the current one ends.
   int window_setting_ = 0;

@@ -51,7 +51,12 @@ double segmentSegmentDistance(const Vec3& p1, const Vec3& p2, const Vec3& q1, co
 struct SelfContactPair {
   // Vertex-triangle: the vertex, then the triangle's corners. Edge-edge: one edge, then the other.
   int index[4] = {0, 0, 0, 0};
+  int triangle = -1;  // vertex-triangle: the triangle's index (its leaf, findPairsNear)
   bool edge_edge = false;
+  // Found by a local search (findPairsNear): not counted among the far candidates, which measure
+  // what the window's length costs (takeFarPairSubsteps), while a local search lists the
+  // neighbours of a particle whose new path differs from theirs by its change of velocity.
+  bool local = false;
   double side = 0.0;       // s: +1 or -1; 0 until it is known (parallel edges at the step start)
   double allowance = 0.0;  // approach closer than h tolerated this step (allowanceFor)
   ContactState state;
@@ -93,6 +98,24 @@ class SelfCollision {
   static constexpr int kPairsPerElement = 16;
   void findPairs(const Particles& particles, const ClothTopology& topology,
                  const MotionBounds& bounds, double thickness, bool edge_pairs, bool keep_states);
+  // A local search within the window, for a few particles that left their bounds
+  // (Collisions): `renewed` lists the particles whose bounds were set anew, every other
+  // particle's still hold (its path only re-expressed from now on). The vertex-triangle
+  // candidates of every leaf pair of the tree that holds a triangle with a renewed corner are
+  // found again, those of every other leaf pair stay: a pair of particles that kept their bounds
+  // is as the last search left it. The changed leaves and their ancestors are refitted, and each
+  // changed leaf is searched against the tree by the rules of the whole traversal
+  // (TriangleTree::forEachLeafPairOf), so a local search costs about its leaves' share of a
+  // search, not a pass over the cloth. Edge-edge pairs stay, as in a repeated search. The order
+  // is findPairs' (by first particle; a particle's kept pairs before its new ones) and pairs found
+  // again keep their side and state. The same budget applies to the whole list.
+  // The particles a local search renews for `leavers` (the cloth particles, index below
+  // `particles`, that left their bounds): the leavers, and every corner of the tree's leaves
+  // that hold a leaver whose triangles all lie in those leaves.
+  const std::vector<int>& renewedAround(const std::vector<int>& leavers, int particles);
+  void findPairsNear(const Particles& particles, const ClothTopology& topology,
+                     const MotionBounds& bounds, double thickness, const std::vector<int>& renewed);
+
   // Whether the last findPairs stopped at its budget (candidates skipped).
   bool lastSearchTruncated() const { return truncated_; }
 
@@ -168,6 +191,16 @@ class SelfCollision {
   std::vector<SelfContactPair> vertex_found_;  // this search's vertex-triangle pairs, then sorted
   std::vector<SelfContactPair> edge_found_;    // this search's edge-edge pairs, then sorted
   std::vector<int> vertex_slot_;               // the counting sort's per-vertex counts, offsets
+  // findPairsNear: the triangles of each cloth vertex (CSR), the leaf of the triangle that owns
+  // each vertex, and the changed leaves (a mark per tree node, and their list).
+  std::vector<int> vertex_triangle_offsets_;
+  std::vector<int> vertex_triangles_;
+  std::vector<int> owner_leaf_;
+  std::vector<char> leaf_changed_;
+  std::vector<int> changed_leaves_;
+  std::vector<unsigned> triangle_corners_;  // the topology's triangles (renewedAround)
+  std::vector<char> particle_renewed_;      // renewedAround's marks, and its list
+  std::vector<int> renewed_;
 };
 
 }  // namespace pbd_cloth

@@ -71,6 +71,23 @@ class TriangleTree {
   void refit(const std::vector<unsigned>& triangles, const Vec3Array& triangle_lo,
              const Vec3Array& triangle_hi, const Vec3Array& start, const Vec3Array& move);
 
+  // A local search: marks the leaves `leaves` (node indices) and their ancestors, clearing the
+  // last marks. refitMarked() then refits the marked nodes only (the boxes or paths of some of
+  // the leaves' triangles changed; every other node stays as the last refit left it), and
+  // forEachMarkedLeafPair() visits, of the pairs forEachLeafPair() would visit, those that hold a
+  // marked leaf, in the same order and by the same rules: a node without a mark holds no such
+  // pair, nor does a pair of nodes without one.
+  void mark(const std::vector<int>& leaves);
+  void refitMarked(const std::vector<unsigned>& triangles, const Vec3Array& triangle_lo,
+                   const Vec3Array& triangle_hi, const Vec3Array& start, const Vec3Array& move);
+  template <class Visit>
+  bool forEachMarkedLeafPair(double cos_flat, Visit&& visit) const {
+    return nodes_.empty() || selfPairs<true>(0, cos_flat, visit);
+  }
+  // The leaf that holds triangle t.
+  int leafOf(int t) const { return leaf_of_[t]; }
+  int nodeCount() const { return static_cast<int>(nodes_.size()); }
+
   // Calls visit(a, b) for every pair of leaves (node indices, each pair once; a == b: the leaf
   // with itself) whose boxes overlap and that no flat patch holds: a connected node whose cone's
   // cosine is at least cos_flat is skipped, and so is a pair of connected nodes that share a
@@ -79,7 +96,7 @@ class TriangleTree {
   // then returns false, and true when it visited every such pair.
   template <class Visit>
   bool forEachLeafPair(double cos_flat, Visit&& visit) const {
-    return nodes_.empty() || selfPairs(0, cos_flat, visit);
+    return nodes_.empty() || selfPairs<false>(0, cos_flat, visit);
   }
 
   // cos(theta) of the flatness bound for thickness h (header comment): max(2 h / g, 0.5), or 2
@@ -97,29 +114,41 @@ class TriangleTree {
   bool flatTogether(const Node& a, const Node& b, double cos_flat) const;
 
   // Both return false once visit has asked to stop.
-  template <class Visit>
+  // kMarked: only the pairs that hold a marked leaf (forEachMarkedLeafPair).
+  template <bool kMarked, class Visit>
   bool selfPairs(int k, double cos_flat, Visit& visit) const {
     const Node& n = nodes_[k];
+    if (kMarked && !marked_[k]) return true;
     if (n.connected && n.cos_angle >= cos_flat) return true;
     if (n.left < 0) return visit(k, k);
-    return selfPairs(n.left, cos_flat, visit) && selfPairs(n.right, cos_flat, visit) &&
-           crossPairs(n.left, n.right, cos_flat, visit);
+    return selfPairs<kMarked>(n.left, cos_flat, visit) &&
+           selfPairs<kMarked>(n.right, cos_flat, visit) &&
+           crossPairs<kMarked>(n.left, n.right, cos_flat, visit);
   }
-  template <class Visit>
+  template <bool kMarked, class Visit>
   bool crossPairs(int i, int j, double cos_flat, Visit& visit) const {
     const Node& a = nodes_[i];
     const Node& b = nodes_[j];
+    if (kMarked && !marked_[i] && !marked_[j]) return true;
     if (!boxesOverlap(a.lo, a.hi, b.lo, b.hi)) return true;
     if (a.connected && b.connected && flatTogether(a, b, cos_flat) && share(a, b)) return true;
     const bool a_leaf = a.left < 0, b_leaf = b.left < 0;
     if (a_leaf && b_leaf) return visit(i, j);
     if (a_leaf || (!b_leaf && b.count > a.count)) {
-      return crossPairs(i, b.left, cos_flat, visit) && crossPairs(i, b.right, cos_flat, visit);
+      return crossPairs<kMarked>(i, b.left, cos_flat, visit) &&
+             crossPairs<kMarked>(i, b.right, cos_flat, visit);
     }
-    return crossPairs(a.left, j, cos_flat, visit) && crossPairs(a.right, j, cos_flat, visit);
+    return crossPairs<kMarked>(a.left, j, cos_flat, visit) &&
+           crossPairs<kMarked>(a.right, j, cos_flat, visit);
   }
 
+  void refitNode(int k, const std::vector<unsigned>& triangles, const Vec3Array& triangle_lo,
+                 const Vec3Array& triangle_hi, const Vec3Array& start, const Vec3Array& move);
   std::vector<Node> nodes_;
+  std::vector<int> parent_;   // -1 for the root
+  std::vector<int> leaf_of_;  // by triangle index
+  std::vector<char> marked_;  // mark(): the marked nodes, and their list
+  std::vector<int> marked_list_;
   std::vector<int> order_;     // triangle indices in leaf order
   std::vector<int> boundary_;  // the nodes' boundary vertices (Node::boundary_first)
   double smallest_altitude_ = 0.0;

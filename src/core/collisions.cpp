@@ -25,6 +25,8 @@ constexpr double kBoxSlack = 0.5;
 // 21.8 against 18.0 ms a step with these), fabric_table keeps the whole step with any of them
 // (README "Self-collision: search windows").
 constexpr double kWindowHalves = 0.1;
+// A local search (Collisions::searchNear) for at most this many leavers per 1024 particles.
+constexpr int kMaxLocalLeavers = 64;
 constexpr double kWindowDoubles = 0.025;
 
 // True when a sphere of radius r at x lies wholly outside the box [lo, hi]: it cannot touch a
@@ -137,6 +139,8 @@ void Collisions::prepare(const Particles& particles, const ClothTopology& topolo
   box_lo_.assign(n, Vec3::Zero());
   box_hi_.assign(n, Vec3::Zero());
   kinematic_reaction_.assign(n, Vec3::Zero());
+  leavers_.clear();
+  leavers_.reserve(kMaxLocalLeavers * n / 1024 + 1);
   particle_contacts_.reserve(particles);
   self_collision_pairs_.reserve(particles, topology);
   substep_ = step_ = 0;
@@ -173,27 +177,53 @@ void Collisions::computeSweptBoxes(const Particles& p, double box_time, double p
                                    double fraction) {
   const bool mid_step = checked_substep_ >= 0;
   path_fraction_ = fraction;
-  for (int i = 0; i < p.size(); ++i) {
-    const Vec3& x = p.position[i];
-    Vec3 end;
-    double slack = 0.0;
-    if (p.inverse_mass[i] == 0.0) {
-      end = p.kinematic_to[i];
-      path_move_[i] = p.kinematic_to[i] - x;
-    } else {
-      end = x + box_time * p.velocity[i] + (box_time * box_time) * gravity_;
-      slack = kBoxSlack * p.radius[i];
-      path_move_[i] = path_time * p.velocity[i] + (0.5 * path_time * path_time) * gravity_;
-    }
-    path_start_[i] = x;
-    Vec3 lo = x.cwiseMin(end), hi = x.cwiseMax(end);
-    if (mid_step) {
-      lo = lo.cwiseMin(p.substep_start[i]);
-      hi = hi.cwiseMax(p.substep_start[i]);
-    }
-    box_lo_[i] = lo.array() - slack;
-    box_hi_[i] = hi.array() + slack;
+  for (int i = 0; i < p.size(); ++i) sweepParticle(p, i, box_time, path_time, mid_step);
+}
+
+void Collisions::sweepParticle(const Particles& p, int i, double box_time, double path_time,
+                               bool mid_step) {
+  const Vec3& x = p.position[i];
+  Vec3 end;
+  double slack = 0.0;
+  if (p.inverse_mass[i] == 0.0) {
+    end = p.kinematic_to[i];
+    path_move_[i] = p.kinematic_to[i] - x;
+  } else {
+    end = x + box_time * p.velocity[i] + (box_time * box_time) * gravity_;
+    slack = kBoxSlack * p.radius[i];
+    path_move_[i] = path_time * p.velocity[i] + (0.5 * path_time * path_time) * gravity_;
   }
+  path_start_[i] = x;
+  Vec3 lo = x.cwiseMin(end), hi = x.cwiseMax(end);
+  if (mid_step) {
+    lo = lo.cwiseMin(p.substep_start[i]);
+    hi = hi.cwiseMax(p.substep_start[i]);
+  }
+  box_lo_[i] = lo.array() - slack;
+  box_hi_[i] = hi.array() + slack;
+}
+
+void Collisions::searchNear(const Particles& p, const ClothTopology& topology) {
+  // The paths of the particles that kept their bounds from this substep's end on: the same
+  // lines, so each particle's bound is unchanged, and all paths share the fraction they start
+  // from, as the cull needs (SelfCollision::findPairs: s the same for all).
+  const double span = window_end_ - path_fraction_;
+  const double along = span > 0.0 ? std::min(1.0, (substep_end_ - path_fraction_) / span) : 1.0;
+  for (int i = 0; i < p.size(); ++i) {
+    path_start_[i] += along * path_move_[i];
+    path_move_[i] *= 1.0 - along;
+  }
+  path_fraction_ = substep_end_;
+  const std::vector<int>& renewed = self_collision_pairs_.renewedAround(leavers_, p.cloth_count);
+  for (int i : renewed) {
+    sweepParticle(p, i, (window_end_ - substep_begin_) * dt_, (window_end_ - substep_end_) * dt_,
+                  true);
+  }
+  const MotionBounds bounds{box_lo_, box_hi_, path_start_, path_move_, kBoxSlack};
+  self_collision_pairs_.findPairsNear(p, topology, bounds, thickness_, renewed);
+  stats_.vertex_triangle_pairs = self_collision_pairs_.vertexTrianglePairCount();
+  if (self_collision_pairs_.lastSearchTruncated()) ++stats_.truncated_searches;
+  ++stats_.local_searches;
 }
 
 void Collisions::findCandidates(const Particles& particles, const ClothTopology& topology,
@@ -216,29 +246,33 @@ void Collisions::findCandidates(const Particles& particles, const ClothTopology&
   ++searches_in_step_;
 }
 
-bool Collisions::leftMotionBounds(const Particles& p, bool paths) const {
-  for (int i = 0; i < p.size(); ++i) {
-    const Vec3& x = p.position[i];
-    if (!((x.array() >= box_lo_[i].array()).all() && (x.array() <= box_hi_[i].array()).all())) {
-      return true;
-    }
-  }
-  if (!paths) return false;
+int Collisions::leftMotionBounds(const Particles& p, bool paths) {
+  leavers_.clear();
+  const int most = kMaxLocalLeavers * p.size() / 1024;
   // The predicted positions are those of the substep's end: that far along the reference paths.
   const double span = window_end_ - path_fraction_;
   const double along = span > 0.0 ? std::min(1.0, (substep_end_ - path_fraction_) / span) : 1.0;
-  for (int i = 0; i < p.cloth_count; ++i) {
-    const Vec3 off_path = p.position[i] - (path_start_[i] + along * path_move_[i]);
-    const double deviation = kBoxSlack * p.radius[i];
-    if (off_path.squaredNorm() > deviation * deviation) return true;
+  for (int i = 0; i < p.size(); ++i) {
+    const Vec3& x = p.position[i];
+    bool left =
+        !((x.array() >= box_lo_[i].array()).all() && (x.array() <= box_hi_[i].array()).all());
+    if (!left && paths && i < p.cloth_count) {
+      const Vec3 off_path = x - (path_start_[i] + along * path_move_[i]);
+      const double deviation = kBoxSlack * p.radius[i];
+      left = off_path.squaredNorm() > deviation * deviation;
+    }
+    if (!left) continue;
+    leavers_.push_back(i);
+    if (static_cast<int>(leavers_.size()) > most) break;
   }
-  return false;
+  return static_cast<int>(leavers_.size());
 }
 
 void Collisions::beginStep(Particles& particles, const ClothTopology& topology, double dt) {
   dt_ = dt;
   ++step_;
   stats_.broad_phase_runs = 0;
+  stats_.local_searches = 0;
   stats_.truncated_searches = 0;
   checked_substep_ = -1;
   std::fill(kinematic_reaction_.begin(), kinematic_reaction_.end(), Vec3::Zero());
@@ -312,11 +346,22 @@ double Collisions::project(Particles& particles, const ClothTopology& topology) 
     const bool window_over = substep_begin_ > window_end_ - rounding;
     if (window_over) window_end_ = std::min(1.0, substep_begin_ + window_fraction_);
     if (window_end_ < substep_end_ + rounding) window_end_ = substep_end_;
-    if ((particle_contacts || self_collision) &&
-        (window_over || leftMotionBounds(particles, self_collision))) {
-      computeSweptBoxes(particles, (window_end_ - substep_begin_) * dt_,
-                        (window_end_ - substep_end_) * dt_, substep_end_);
-      findCandidates(particles, topology, false, window_over);
+    const int leavers = (particle_contacts || self_collision) && !window_over
+                            ? leftMotionBounds(particles, self_collision)
+                            : 0;
+    if ((particle_contacts || self_collision) && (window_over || leavers > 0)) {
+      // A few cloth particles off their bounds search again alone (a pass over the cloth for
+      // each would make the searches of a step grow with the cloth: README "Local searches");
+      // many, a new window, or particle-particle contacts, whose broad phase has no local form,
+      // the whole search.
+      if (!window_over && self_collision && !particle_contacts &&
+          leavers <= kMaxLocalLeavers * particles.size() / 1024) {
+        searchNear(particles, topology);
+      } else {
+        computeSweptBoxes(particles, (window_end_ - substep_begin_) * dt_,
+                          (window_end_ - substep_end_) * dt_, substep_end_);
+        findCandidates(particles, topology, false, window_over);
+      }
       if (particle_contacts) {
         particle_contacts_.measureAllowances(particles, particles.step_start, kOverlapSlop);
       }

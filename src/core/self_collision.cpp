@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <iterator>
 #include <utility>
 
 namespace pbd_cloth {
@@ -268,6 +269,37 @@ void SelfCollision::reserve(const Particles& particles, const ClothTopology& top
       }
     }
   }
+  // findPairsNear's maps.
+  vertex_triangle_offsets_.assign(particles.cloth_count + 1, 0);
+  for (unsigned v : topology.triangles) {
+    if (static_cast<int>(v) < particles.cloth_count) ++vertex_triangle_offsets_[v + 1];
+  }
+  for (int v = 0; v < particles.cloth_count; ++v) {
+    vertex_triangle_offsets_[v + 1] += vertex_triangle_offsets_[v];
+  }
+  vertex_triangles_.assign(vertex_triangle_offsets_.back(), 0);
+  {
+    std::vector<int> next(vertex_triangle_offsets_.begin(), vertex_triangle_offsets_.end() - 1);
+    for (int t = 0; t < triangles; ++t) {
+      for (int e = 0; e < 3; ++e) {
+        const int v = static_cast<int>(topology.triangles[3 * t + e]);
+        if (v < particles.cloth_count) vertex_triangles_[next[v]++] = t;
+      }
+    }
+  }
+  owner_leaf_.assign(particles.cloth_count, -1);
+  for (int t = 0; t < triangles; ++t) {
+    for (int v : owned_vertices_[t]) {
+      if (v >= 0) owner_leaf_[v] = tree_.leafOf(t);
+    }
+  }
+  leaf_changed_.assign(tree_.nodeCount(), 0);
+  triangle_corners_ = topology.triangles;
+  particle_renewed_.assign(particles.cloth_count, 0);
+  renewed_.clear();
+  renewed_.reserve(particles.cloth_count);
+  changed_leaves_.clear();
+  changed_leaves_.reserve(tree_.nodeCount());
   grown_lo_.reserve(particles.cloth_count);
   grown_hi_.reserve(particles.cloth_count);
   triangle_lo_.reserve(triangles);
@@ -364,6 +396,123 @@ void SelfCollision::findPairs(const Particles& p, const ClothTopology& topology,
   }
 }
 
+const std::vector<int>& SelfCollision::renewedAround(const std::vector<int>& leavers,
+                                                     int particles) {
+  // The leaves that hold a leaver are searched again anyway; so are their particles renewed,
+  // which on paths of before the leaver's change of velocity would leave theirs a substep later
+  // one by one, each with a search of its own: every corner of those leaves whose triangles all
+  // lie in them (a corner with a triangle elsewhere would add that leaf to the search).
+  changed_leaves_.clear();
+  for (int v : leavers) {
+    if (v >= particles) continue;
+    for (int k = vertex_triangle_offsets_[v]; k < vertex_triangle_offsets_[v + 1]; ++k) {
+      const int leaf = tree_.leafOf(vertex_triangles_[k]);
+      if (!leaf_changed_[leaf]) {
+        leaf_changed_[leaf] = 1;
+        changed_leaves_.push_back(leaf);
+      }
+    }
+  }
+  renewed_.clear();
+  for (int v : leavers) {
+    if (v < particles && !particle_renewed_[v]) {  // (a particle of no triangle too)
+      particle_renewed_[v] = 1;
+      renewed_.push_back(v);
+    }
+  }
+  for (int leaf : changed_leaves_) {
+    const TriangleTree::Node& n = tree_.node(leaf);
+    for (int s = n.first; s < n.first + n.count; ++s) {
+      for (int e = 0; e < 3; ++e) {
+        const int v = static_cast<int>(triangle_corners_[3 * tree_.triangle(s) + e]);
+        if (v >= particles || particle_renewed_[v]) continue;
+        bool inside = true;
+        for (int k = vertex_triangle_offsets_[v]; inside && k < vertex_triangle_offsets_[v + 1];
+             ++k) {
+          inside = leaf_changed_[tree_.leafOf(vertex_triangles_[k])] != 0;
+        }
+        if (!inside) continue;
+        particle_renewed_[v] = 1;
+        renewed_.push_back(v);
+      }
+    }
+  }
+  for (int leaf : changed_leaves_) leaf_changed_[leaf] = 0;
+  for (int v : renewed_) particle_renewed_[v] = 0;
+  return renewed_;
+}
+
+void SelfCollision::findPairsNear(const Particles& p, const ClothTopology& topology,
+                                  const MotionBounds& bounds, double thickness,
+                                  const std::vector<int>& renewed) {
+  truncated_ = false;
+  const int triangles = topology.triangleCount();
+  if (triangles == 0) return;
+  const double half = 0.5 * thickness;
+  changed_leaves_.clear();
+  for (int v : renewed) {
+    if (v >= p.cloth_count) continue;
+    grown_lo_[v] = bounds.lo[v].array() - half;
+    grown_hi_[v] = bounds.hi[v].array() + half;
+    for (int k = vertex_triangle_offsets_[v]; k < vertex_triangle_offsets_[v + 1]; ++k) {
+      const int leaf = tree_.leafOf(vertex_triangles_[k]);
+      if (!leaf_changed_[leaf]) {
+        leaf_changed_[leaf] = 1;
+        changed_leaves_.push_back(leaf);
+      }
+    }
+  }
+  std::sort(changed_leaves_.begin(), changed_leaves_.end());
+  const auto& tri = topology.triangles;
+  for (int leaf : changed_leaves_) {
+    const TriangleTree::Node& n = tree_.node(leaf);
+    for (int s = n.first; s < n.first + n.count; ++s) {
+      const int t = tree_.triangle(s);
+      const unsigned a = tri[3 * t], b = tri[3 * t + 1], c = tri[3 * t + 2];
+      triangle_lo_[t] = grown_lo_[a].cwiseMin(grown_lo_[b]).cwiseMin(grown_lo_[c]);
+      triangle_hi_[t] = grown_hi_[a].cwiseMax(grown_hi_[b]).cwiseMax(grown_hi_[c]);
+    }
+  }
+  tree_.mark(changed_leaves_);
+  tree_.refitMarked(tri, triangle_lo_, triangle_hi_, bounds.path_start, bounds.path_move);
+  // The vertex-triangle pairs of changed leaf pairs go aside (in order) to hand their states on.
+  previous_.clear();
+  previous_edge_count_ = 0;
+  std::size_t kept = static_cast<std::size_t>(edge_pair_count_);
+  for (std::size_t k = kept; k < pairs_.size(); ++k) {
+    const SelfContactPair& pair = pairs_[k];
+    if (leaf_changed_[owner_leaf_[pair.index[0]]] || leaf_changed_[tree_.leafOf(pair.triangle)]) {
+      previous_.push_back(pair);
+    } else {
+      pairs_[kept++] = pair;
+    }
+  }
+  pairs_.resize(kept);
+  vertex_found_.clear();
+  const std::size_t kept_vertex_pairs = kept - static_cast<std::size_t>(edge_pair_count_);
+  truncated_ = !tree_.forEachMarkedLeafPair(tree_.cosFlat(thickness), [&](int a, int b) {
+    findLeafPairs(a, b, p, topology, bounds, thickness, false);
+    return kept_vertex_pairs + vertex_found_.size() < pair_budget_;
+  });
+  for (int leaf : changed_leaves_) leaf_changed_[leaf] = 0;
+  // The new pairs in a total order (no two share all four indices), their states carried, then
+  // merged with the kept ones by first particle.
+  std::sort(vertex_found_.begin(), vertex_found_.end(),
+            [](const SelfContactPair& a, const SelfContactPair& b) {
+              return std::lexicographical_compare(a.index, a.index + 4, b.index, b.index + 4);
+            });
+  for (SelfContactPair& pair : vertex_found_) pair.local = true;
+  carryStates(vertex_found_.begin(), vertex_found_.end(), previous_.begin(), previous_.end());
+  edge_found_.assign(pairs_.begin() + edge_pair_count_, pairs_.end());  // scratch: the kept
+  pairs_.resize(edge_pair_count_);
+  std::merge(edge_found_.begin(), edge_found_.end(), vertex_found_.begin(), vertex_found_.end(),
+             std::back_inserter(pairs_), [](const SelfContactPair& a, const SelfContactPair& b) {
+               return a.index[0] < b.index[0];
+             });
+  edge_found_.clear();
+  vertex_found_.clear();
+}
+
 void SelfCollision::appendByFirstParticle(std::vector<SelfContactPair>& found, int particles) {
   std::fill(vertex_slot_.begin(), vertex_slot_.end(), 0);
   for (const SelfContactPair& pair : found) ++vertex_slot_[pair.index[0] + 1];
@@ -458,6 +607,7 @@ void SelfCollision::addVertexTriangle(int v, int t, const Particles& p,
   pair.index[1] = a;
   pair.index[2] = b;
   pair.index[3] = c;
+  pair.triangle = t;
   pair.side = start.distance >= 0.0 ? 1.0 : -1.0;
   vertex_found_.push_back(pair);
 }
@@ -554,7 +704,7 @@ double SelfCollision::project(Particles& p, double thickness, int substep,
       const double band = kEdgeBand * thickness;
       const bool apart = pair.edge_edge ? edgesApart(pair, p.substep_start, band)
                                         : vertexApart(pair, p.substep_start, band);
-      far_pair_substeps_ += apart;
+      far_pair_substeps_ += apart && !pair.local;
       if (pair.edge_edge && apart) {
         if (!edgeSide(pair, p.substep_start, side)) {
           pair.side = 0.0;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <numeric>
 
 namespace pbd_cloth {
@@ -120,6 +121,8 @@ void TriangleTree::build(const std::vector<unsigned>& tri, const Vec3Array& x) {
   const int triangles = static_cast<int>(tri.size() / 3);
   nodes_.clear();
   boundary_.clear();
+  parent_.clear();
+  leaf_of_.clear();
   order_.resize(triangles);
   std::iota(order_.begin(), order_.end(), 0);
   smallest_altitude_ = 0.0;
@@ -143,6 +146,19 @@ void TriangleTree::build(const std::vector<unsigned>& tri, const Vec3Array& x) {
   smallest_altitude_ = std::isfinite(smallest) ? smallest : 0.0;
   nodes_.reserve(4 * (triangles / kLeafTriangles + 1));
   buildNode(0, triangles, centroid);
+  parent_.assign(nodes_.size(), -1);
+  leaf_of_.assign(triangles, -1);
+  for (int k = 0; k < static_cast<int>(nodes_.size()); ++k) {
+    const Node& n = nodes_[k];
+    if (n.left >= 0) {
+      parent_[n.left] = parent_[n.right] = k;
+    } else {
+      for (int s = n.first; s < n.first + n.count; ++s) leaf_of_[order_[s]] = k;
+    }
+  }
+  marked_.assign(nodes_.size(), 0);
+  marked_list_.clear();
+  marked_list_.reserve(nodes_.size());
 
   // Each node's boundary (its vertices used by fewer of its triangles than in all) and whether
   // its triangles form one patch (union-find through the first of its triangles at each vertex).
@@ -192,37 +208,61 @@ void TriangleTree::refit(const std::vector<unsigned>& tri, const Vec3Array& tria
                          const Vec3Array& triangle_hi, const Vec3Array& x, const Vec3Array& u) {
   // Children come after their parent (built depth first): backwards, children before parents.
   for (int k = static_cast<int>(nodes_.size()) - 1; k >= 0; --k) {
-    Node& n = nodes_[k];
-    Cone cone;
-    if (n.left < 0) {
-      // A leaf's cone straight from its triangles' normal directions (no pairwise merging).
-      Vec3 directions[3 * kLeafTriangles];
-      int count = 0;
-      bool defined = true;
-      const int first = order_[n.first];
-      n.lo = triangle_lo[first];
-      n.hi = triangle_hi[first];
-      for (int s = n.first; s < n.first + n.count; ++s) {
-        const int t = order_[s];
-        const unsigned a = tri[3 * t], b = tri[3 * t + 1], c = tri[3 * t + 2];
-        n.lo = n.lo.cwiseMin(triangle_lo[t]);
-        n.hi = n.hi.cwiseMax(triangle_hi[t]);
-        if (defined) {
-          defined = addNormalDirections(x[a], x[b], x[c], u[a], u[b], u[c], directions, count);
-        }
-      }
-      if (defined) cone = coneOfDirections(directions, count);
-    } else {
-      const Node& l = nodes_[n.left];
-      const Node& r = nodes_[n.right];
-      n.lo = l.lo.cwiseMin(r.lo);
-      n.hi = l.hi.cwiseMax(r.hi);
-      cone = merge(coneOf(l), coneOf(r));
-    }
-    n.axis = cone.axis;
-    n.cos_angle = cone.cos_angle;
-    n.sin_angle = cone.sin_angle;
+    refitNode(k, tri, triangle_lo, triangle_hi, x, u);
   }
+}
+
+void TriangleTree::mark(const std::vector<int>& leaves) {
+  for (int k : marked_list_) marked_[k] = 0;
+  marked_list_.clear();
+  for (int leaf : leaves) {
+    for (int k = leaf; k >= 0 && !marked_[k]; k = parent_[k]) {
+      marked_[k] = 1;
+      marked_list_.push_back(k);
+    }
+  }
+  // Children before parents, as refit goes.
+  std::sort(marked_list_.begin(), marked_list_.end(), std::greater<int>());
+}
+
+void TriangleTree::refitMarked(const std::vector<unsigned>& tri, const Vec3Array& triangle_lo,
+                               const Vec3Array& triangle_hi, const Vec3Array& x,
+                               const Vec3Array& u) {
+  for (int k : marked_list_) refitNode(k, tri, triangle_lo, triangle_hi, x, u);
+}
+
+void TriangleTree::refitNode(int k, const std::vector<unsigned>& tri, const Vec3Array& triangle_lo,
+                             const Vec3Array& triangle_hi, const Vec3Array& x, const Vec3Array& u) {
+  Node& n = nodes_[k];
+  Cone cone;
+  if (n.left < 0) {
+    // A leaf's cone straight from its triangles' normal directions (no pairwise merging).
+    Vec3 directions[3 * kLeafTriangles];
+    int count = 0;
+    bool defined = true;
+    const int first = order_[n.first];
+    n.lo = triangle_lo[first];
+    n.hi = triangle_hi[first];
+    for (int s = n.first; s < n.first + n.count; ++s) {
+      const int t = order_[s];
+      const unsigned a = tri[3 * t], b = tri[3 * t + 1], c = tri[3 * t + 2];
+      n.lo = n.lo.cwiseMin(triangle_lo[t]);
+      n.hi = n.hi.cwiseMax(triangle_hi[t]);
+      if (defined) {
+        defined = addNormalDirections(x[a], x[b], x[c], u[a], u[b], u[c], directions, count);
+      }
+    }
+    if (defined) cone = coneOfDirections(directions, count);
+  } else {
+    const Node& l = nodes_[n.left];
+    const Node& r = nodes_[n.right];
+    n.lo = l.lo.cwiseMin(r.lo);
+    n.hi = l.hi.cwiseMax(r.hi);
+    cone = merge(coneOf(l), coneOf(r));
+  }
+  n.axis = cone.axis;
+  n.cos_angle = cone.cos_angle;
+  n.sin_angle = cone.sin_angle;
 }
 
 bool TriangleTree::share(const Node& a, const Node& b) const {

@@ -30,6 +30,7 @@ const char kUsage[] =
     "vertex_triangle_pairs edge_edge_pairs (self-collision candidates per step) search_window\n"
     "(substeps per contact search, mean over the steps) truncated_searches (self-collision\n"
     "searches of the run that stopped at their candidate budget: a cloth crushed into itself)\n"
+    "local_searches (per step: searches for a few particles that left their bounds, alone)\n"
     "method substeps\n"
     "iterations ...).\n"
     "Only the step calls are timed (cpu_ms_per_step: their processor time, which leaves out\n"
@@ -178,6 +179,7 @@ struct BenchResult {
   double iterations_per_step = 0.0;
   double predict_ms = 0.0, collide_ms = 0.0, project_ms = 0.0, update_ms = 0.0, contact_ms = 0.0;
   double broad_phase_runs = 0.0;  // per step: 1, plus re-runs for particles that left their boxes
+  double local_searches = 0.0;    // per step: searches for a few such particles alone
   // Self-collision candidates per step (the last broad phase of each step), mean over the run.
   double vertex_triangle_pairs = 0.0, edge_edge_pairs = 0.0;
   double search_window = 0.0;  // substeps per contact search, mean over the steps
@@ -277,7 +279,7 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
   double step_seconds = 0.0;
   std::clock_t step_cpu = 0;
   double predict = 0.0, collide = 0.0, project = 0.0, update = 0.0, contact = 0.0;
-  long long broad_phase_runs = 0;
+  long long broad_phase_runs = 0, local_searches = 0;
   long long vertex_triangle_pairs = 0, edge_edge_pairs = 0;
   long long search_window = 0;
   long long truncated_searches = 0;
@@ -309,6 +311,7 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
     update += stats.update_time;
     contact += stats.contact_time;
     broad_phase_runs += sim.collisions().stats().broad_phase_runs;
+    local_searches += sim.collisions().stats().local_searches;
     vertex_triangle_pairs += sim.collisions().stats().vertex_triangle_pairs;
     edge_edge_pairs += sim.collisions().stats().edge_edge_pairs;
     search_window += sim.collisions().stats().search_window;
@@ -352,6 +355,7 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
   result.update_ms = 1e3 * update * per_step;
   result.contact_ms = 1e3 * contact * per_step;
   result.broad_phase_runs = static_cast<double>(broad_phase_runs) * per_step;
+  result.local_searches = static_cast<double>(local_searches) * per_step;
   result.vertex_triangle_pairs = static_cast<double>(vertex_triangle_pairs) * per_step;
   result.edge_edge_pairs = static_cast<double>(edge_edge_pairs) * per_step;
   result.search_window = static_cast<double>(search_window) * per_step;
@@ -370,7 +374,7 @@ void printResult(const pbd_cloth::SceneConfig& scene, const BenchResult& r) {
       "final_structural_max_strain=%.9g final_structural_mean_strain=%.9g cpu_ms_per_step=%.6g "
       "asleep_steps=%lld asleep_ms_per_step=%.6g awake_ms_per_step=%.6g "
       "vertex_triangle_pairs=%.6g edge_edge_pairs=%.6g search_window=%.6g "
-      "truncated_searches=%lld",
+      "truncated_searches=%lld local_searches=%.6g",
       r.wall_ms_per_step, r.max_strain, last.mean_strain, r.max_penetration,
       last.self_intersections, last.energy, last.finite ? 1 : 0, r.steps, r.sim_time,
       r.iterations_per_step, r.predict_ms, r.collide_ms, r.project_ms, r.update_ms,
@@ -379,7 +383,7 @@ void printResult(const pbd_cloth::SceneConfig& scene, const BenchResult& r) {
       pbd_cloth::toString(scene.solver.ordering), r.contact_ms, r.broad_phase_runs,
       last.structural_max_strain, last.structural_mean_strain, r.cpu_ms_per_step, r.asleep_steps,
       r.asleep_ms_per_step, r.awake_ms_per_step, r.vertex_triangle_pairs, r.edge_edge_pairs,
-      r.search_window, r.truncated_searches);
+      r.search_window, r.truncated_searches, r.local_searches);
   if (r.depth_ms >= 0.0) std::printf(" depth_ms=%.6g", r.depth_ms);
   std::printf("\n");
 }

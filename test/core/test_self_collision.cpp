@@ -100,9 +100,9 @@ TEST_P(FoldWithSearchWindow, NeverIntersects) {
 
 INSTANTIATE_TEST_SUITE_P(SelfCollision, FoldWithSearchWindow, ::testing::Values(0, 1, 4));
 
-// solver.threads splits the self-collision broad phase (the two searches side by side at the step
-// start, the vertices' queries in ranges when it runs again within a step): the fold ends in the
-// same positions, bit for bit, with 1, 2 and 3 threads. The runs start from the fold's state at
+// solver.threads splits the stretch links, hinges and obstacle contacts around the self-contacts
+// (whose searches, whole and local, run on the calling thread): the fold ends in the same
+// positions, bit for bit, with 1, 2 and 3 threads. The runs start from the fold's state at
 // 2.5 s (step 150), just before its layers meet (the paths' cull lists no pair before that), and
 // run through the contact. (A race shows here only now and then; scripts/run_thread_sanitizer
 // runs this test under ThreadSanitizer, which sees it every time.)
@@ -124,10 +124,11 @@ TEST(SelfCollision, EveryThreadCountFindsTheSamePairs) {
     for (int k = 0; k < 60; ++k) {
       sim.step();
       most_pairs = std::max(most_pairs, sim.collisions().stats().vertex_triangle_pairs);
-      most_runs = std::max(most_runs, sim.collisions().stats().broad_phase_runs);
+      most_runs = std::max(most_runs, sim.collisions().stats().broad_phase_runs +
+                                          sim.collisions().stats().local_searches);
     }
     EXPECT_GT(most_pairs, 0);  // the fold brings the layers together
-    EXPECT_GT(most_runs, 1);   // and the search runs again within a step (ranges on threads)
+    EXPECT_GT(most_runs, 1);   // and the search runs again within a step (locally, here)
     ends.push_back(sim.particles().position);
     EXPECT_EQ(ends.back(), ends.front()) << threads << " threads";
   }
@@ -474,6 +475,88 @@ TEST(SelfCollision, TreeListsEveryPairWithinTwiceTheThickness) {
   expectTreeListsEveryClosePair(meshClothScene(mesh, h), {0, 5}, "two stacked squares");
   SceneConfig shirt = loadScene(kSourceDirectory + "/config/tshirt.yaml");
   expectTreeListsEveryClosePair(shirt, {0, 30, 60}, "tshirt");
+}
+
+// A local search (SelfCollision::findPairsNear, Collisions' search for a few particles that left
+// their bounds) lists every vertex-triangle pair within 2 h, as the whole search does: on the same
+// states, after a whole search, every 7th particle leaves (moved by 1.5 h across the cloth and
+// given another velocity), the particles renewedAround them get bounds of their new state, the
+// others keep theirs, and the local search's list is compared with every pair of the cloth at the
+// new positions. It also lists fewer candidates than there are pairs within the changed leaves'
+// reach of a whole search would cost: the kept pairs come from the search before.
+void expectLocalSearchListsEveryClosePair(const SceneConfig& scene,
+                                          const std::vector<int>& at_steps, const char* what) {
+  Simulation sim(scene);
+  SelfCollision search;
+  search.reserve(sim.particles(), sim.topology());
+  const ClothTopology& topology = sim.topology();
+  const double dt = 1.0 / scene.step_rate, h = scene.cloth.thickness;
+  long close = 0, missed = 0, renewed_total = 0;
+  int step = 0;
+  for (int target : at_steps) {
+    for (; step < target; ++step) sim.step();
+    Particles at = sim.particles();
+    at.step_start = at.position;
+    const int n = at.size();
+    Vec3Array lo(n), hi(n), start(n), move(n);
+    auto bound = [&](int i) {
+      move[i] = dt * at.velocity[i];
+      start[i] = at.position[i];
+      const Vec3 end = at.position[i] + move[i];
+      lo[i] = at.position[i].cwiseMin(end).array() - 0.5 * at.radius[i];
+      hi[i] = at.position[i].cwiseMax(end).array() + 0.5 * at.radius[i];
+    };
+    for (int i = 0; i < n; ++i) bound(i);
+    const MotionBounds bounds{lo, hi, start, move, 0.5};
+    search.findPairs(at, topology, bounds, h, true, false);
+    std::vector<int> leavers;
+    for (int i = 3; i < at.cloth_count; i += 7) {
+      if (at.inverse_mass[i] == 0.0) continue;
+      leavers.push_back(i);
+      // Across the cloth (along its local normal, roughly) and sideways: out of its box.
+      at.position[i] += Vec3(0.9 * h, -0.9 * h, 0.9 * h);
+      at.velocity[i] = -at.velocity[i] + Vec3(0.1, 0.0, -0.2);
+    }
+    const std::vector<int> renewed = search.renewedAround(leavers, at.cloth_count);
+    renewed_total += static_cast<long>(renewed.size());
+    for (int i : renewed) bound(i);
+    search.findPairsNear(at, topology, bounds, h, renewed);
+    std::set<std::array<int, 4>> listed;
+    for (const SelfContactPair& pair : search.pairs()) {
+      if (!pair.edge_edge)
+        listed.insert({pair.index[0], pair.index[1], pair.index[2], pair.index[3]});
+    }
+    const Vec3Array& x = at.position;
+    const auto& tri = topology.triangles;
+    long state_close = 0, state_missed = 0;
+    for (int t = 0; t < topology.triangleCount(); ++t) {
+      const int a = static_cast<int>(tri[3 * t]), b = static_cast<int>(tri[3 * t + 1]),
+                c = static_cast<int>(tri[3 * t + 2]);
+      for (int v = 0; v < at.cloth_count; ++v) {
+        if (v == a || v == b || v == c) continue;
+        if (pointTriangleDistance(x[v], x[a], x[b], x[c]) > 2.0 * h) continue;
+        ++state_close;
+        if (!listed.count({v, a, b, c})) ++state_missed;
+      }
+    }
+    EXPECT_EQ(state_missed, 0) << what << ", step " << target << ": " << state_close
+                               << " vertex-triangle pairs within 2 h";
+    close += state_close;
+    missed += state_missed;
+  }
+  std::printf(
+      "%s: %ld vertex-triangle pairs within 2 h after the local searches, %ld missed, "
+      "%ld particles renewed\n",
+      what, close, missed, renewed_total);
+  EXPECT_GT(close, 0) << what << ": no state brought the cloth near itself";
+}
+
+TEST(SelfCollision, LocalSearchListsEveryPairWithinTwiceTheThickness) {
+  std::vector<int> fold_steps;
+  for (int k = 150; k < 240; k += 6) fold_steps.push_back(k);
+  expectLocalSearchListsEveryClosePair(foldScene(true), fold_steps, "fold");
+  SceneConfig shirt = loadScene(kSourceDirectory + "/config/tshirt.yaml");
+  expectLocalSearchListsEveryClosePair(shirt, {0, 30, 60}, "tshirt");
 }
 
 }  // namespace
