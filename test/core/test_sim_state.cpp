@@ -125,6 +125,32 @@ TEST(SimState, VerletContinuesBitForBit) {
   expectContinuesBitForBit(scene, 60, 120);
 }
 
+// A state's positions are taken as they are, pinned particles included (README "Saving and
+// restoring state"): a pinned corner moved 10 cm in the state is accepted, stays exactly there
+// through the steps after, and the cloth hangs from it (its neighbour follows within a link; with
+// tethers, as "Choosing a method" advises for a hanging cloth: without them the links at the pins
+// of hanging.yaml stretch by tens of per cent).
+TEST(SimState, PinnedParticlesStayWhereTheStatePutsThem) {
+  SceneConfig scene = shippedScene("hanging.yaml", {"cloth.tethers=true"});
+  Simulation sim(scene);
+  for (int k = 0; k < 30; ++k) sim.step();
+  SimulationState state;
+  sim.getState(state);
+  const int pin = scene.cloth.pinned.front();
+  ASSERT_TRUE(sim.particles().isKinematic(pin));
+  const Vec3 moved = state.position[pin] + Vec3(0.1, 0.0, 0.05);
+  state.position[pin] = moved;
+  std::string reason;
+  ASSERT_TRUE(sim.setState(state, reason)) << reason;
+  for (int k = 0; k < 120; ++k) sim.step();
+  EXPECT_EQ(sim.particles().position[pin], moved);
+  EXPECT_EQ(sim.particles().velocity[pin], Vec3::Zero());
+  const int neighbour = pin + 1;  // the next particle of the top row
+  const double link = scene.cloth.spacing;
+  EXPECT_LT((sim.particles().position[neighbour] - moved).norm(), 1.01 * link);
+  EXPECT_TRUE(sim.computeMetrics().finite);
+}
+
 // The drape scene (ball, table, floor; friction; self-collision) with a live gripper that grasps
 // an edge and pulls it (released after the save) and the ball moved by live poses, as the node
 // drives them.
