@@ -98,21 +98,21 @@ class SelfCollision {
   static constexpr int kPairsPerElement = 16;
   void findPairs(const Particles& particles, const ClothTopology& topology,
                  const MotionBounds& bounds, double thickness, bool edge_pairs, bool keep_states);
-  // A local search within the window, for a few particles that left their bounds
-  // (Collisions): `renewed` lists the particles whose bounds were set anew, every other
-  // particle's still hold (its path only re-expressed from now on). The vertex-triangle
-  // candidates of every leaf pair of the tree that holds a triangle with a renewed corner are
-  // found again, those of every other leaf pair stay: a pair of particles that kept their bounds
-  // is as the last search left it. The changed leaves and their ancestors are refitted, and each
-  // changed leaf is searched against the tree by the rules of the whole traversal
-  // (TriangleTree::forEachLeafPairOf), so a local search costs about its leaves' share of a
-  // search, not a pass over the cloth. Edge-edge pairs stay, as in a repeated search. The order
-  // is findPairs' (by first particle; a particle's kept pairs before its new ones) and pairs found
-  // again keep their side and state. The same budget applies to the whole list.
   // The particles a local search renews for `leavers` (the cloth particles, index below
   // `particles`, that left their bounds): the leavers, and every corner of the tree's leaves
   // that hold a leaver whose triangles all lie in those leaves.
   const std::vector<int>& renewedAround(const std::vector<int>& leavers, int particles);
+  // A local search within the window, for a few particles that left their bounds
+  // (Collisions::searchNear): `renewed` lists the particles whose bounds were set anew, every
+  // other particle's still hold (its path only re-expressed from now on). The vertex-triangle
+  // candidates of every leaf pair of the tree that holds a triangle with a renewed corner are
+  // found again, those of every other leaf pair stay: a pair of particles that kept their bounds
+  // is as the last search left it. The changed leaves and their ancestors alone are refitted, and
+  // the whole traversal runs restricted to them (TriangleTree::mark, forEachMarkedLeafPair), so a
+  // local search costs about its leaves' share of a search, not a pass over the cloth. Edge-edge
+  // pairs stay, as in a repeated search. The list stays ordered by first particle (a particle's
+  // kept pairs before its new ones, those by their indices), pairs found again keep their side
+  // and state, and the same budget applies to the whole list.
   void findPairsNear(const Particles& particles, const ClothTopology& topology,
                      const MotionBounds& bounds, double thickness, const std::vector<int>& renewed);
 
