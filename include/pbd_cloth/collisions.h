@@ -79,8 +79,8 @@ struct CollisionStats {
   int particle_pairs = 0;         // particle-particle candidates
   int vertex_triangle_pairs = 0;  // self-collision candidates: a vertex near a triangle
   int edge_edge_pairs = 0;        // self-collision candidates: two edges near each other
-  int broad_phase_runs = 0;       // 1, plus one per new window and per substep whose particles
-                                  // left their swept boxes
+  int broad_phase_runs = 0;       // whole searches: 1, plus one per new window and per substep
+                                  // where too many particles left their bounds for a local one
   int local_searches = 0;         // searches for a few particles that left their bounds
                                   // (SelfCollision::findPairsNear), not counted above
   int search_window = 0;          // substeps one search covered (solver.search_window)
