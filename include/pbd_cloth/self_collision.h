@@ -101,7 +101,8 @@ class SelfCollision {
   // The particles a local search renews for `leavers` (the cloth particles, index below
   // `particles`, that left their bounds): the leavers, and every corner of the tree's leaves
   // that hold a leaver whose triangles all lie in those leaves.
-  const std::vector<int>& renewedAround(const std::vector<int>& leavers, int particles);
+  const std::vector<int>& renewedAround(const std::vector<int>& leavers,
+                                        const ClothTopology& topology, int particles);
   // A local search within the window, for a few particles that left their bounds
   // (Collisions::searchNear): `renewed` lists the particles whose bounds were set anew, every
   // other particle's still hold (its path only re-expressed from now on). The vertex-triangle
@@ -164,6 +165,11 @@ class SelfCollision {
   void addEdgeEdge(int e, int f, const Particles& particles, const ClothTopology& topology,
                    const MotionBounds& bounds, double thickness);
   bool neighbours(int u, int v, const ClothTopology& topology) const;
+  // findPairsNear: marks the leaves of vertex v's triangles as changed (leaf_changed_,
+  // changed_leaves_).
+  void markLeavesOf(int v);
+  // Triangle t's box from its corners' grown boxes.
+  void boxTriangle(int t, const std::vector<unsigned>& triangles);
   using PairIterator = std::vector<SelfContactPair>::iterator;
   // Moves `found` to the end of pairs_, ordered by each pair's first particle.
   void appendByFirstParticle(std::vector<SelfContactPair>& found, int particles);
@@ -198,8 +204,7 @@ class SelfCollision {
   std::vector<int> owner_leaf_;
   std::vector<char> leaf_changed_;
   std::vector<int> changed_leaves_;
-  std::vector<unsigned> triangle_corners_;  // the topology's triangles (renewedAround)
-  std::vector<char> particle_renewed_;      // renewedAround's marks, and its list
+  std::vector<char> particle_renewed_;  // renewedAround's marks, and its list
   std::vector<int> renewed_;
 };
 

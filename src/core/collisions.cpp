@@ -25,9 +25,10 @@ constexpr double kBoxSlack = 0.5;
 // 21.8 against 18.0 ms a step with these), fabric_table keeps the whole step with any of them
 // (README "Self-collision: search windows").
 constexpr double kWindowHalves = 0.1;
+constexpr double kWindowDoubles = 0.025;
 // A local search (Collisions::searchNear) for at most this many leavers per 1024 particles.
 constexpr int kMaxLocalLeavers = 64;
-constexpr double kWindowDoubles = 0.025;
+int mostLocalLeavers(int particles) { return kMaxLocalLeavers * particles / 1024; }
 
 // True when a sphere of radius r at x lies wholly outside the box [lo, hi]: it cannot touch a
 // shape inside that box.
@@ -140,7 +141,7 @@ void Collisions::prepare(const Particles& particles, const ClothTopology& topolo
   box_hi_.assign(n, Vec3::Zero());
   kinematic_reaction_.assign(n, Vec3::Zero());
   leavers_.clear();
-  leavers_.reserve(kMaxLocalLeavers * n / 1024 + 1);
+  leavers_.reserve(mostLocalLeavers(n) + 1);
   particle_contacts_.reserve(particles);
   self_collision_pairs_.reserve(particles, topology);
   substep_ = step_ = 0;
@@ -214,7 +215,8 @@ void Collisions::searchNear(const Particles& p, const ClothTopology& topology) {
     path_move_[i] *= 1.0 - along;
   }
   path_fraction_ = substep_end_;
-  const std::vector<int>& renewed = self_collision_pairs_.renewedAround(leavers_, p.cloth_count);
+  const std::vector<int>& renewed =
+      self_collision_pairs_.renewedAround(leavers_, topology, p.cloth_count);
   for (int i : renewed) {
     sweepParticle(p, i, (window_end_ - substep_begin_) * dt_, (window_end_ - substep_end_) * dt_,
                   true);
@@ -248,7 +250,7 @@ void Collisions::findCandidates(const Particles& particles, const ClothTopology&
 
 int Collisions::leftMotionBounds(const Particles& p, bool paths) {
   leavers_.clear();
-  const int most = kMaxLocalLeavers * p.size() / 1024;
+  const int most = mostLocalLeavers(p.size());
   // The predicted positions are those of the substep's end: that far along the reference paths.
   const double span = window_end_ - path_fraction_;
   const double along = span > 0.0 ? std::min(1.0, (substep_end_ - path_fraction_) / span) : 1.0;
@@ -355,7 +357,7 @@ double Collisions::project(Particles& particles, const ClothTopology& topology) 
       // many, a new window, or particle-particle contacts, whose broad phase has no local form,
       // the whole search.
       if (!window_over && self_collision && !particle_contacts &&
-          leavers <= kMaxLocalLeavers * particles.size() / 1024) {
+          leavers <= mostLocalLeavers(particles.size())) {
         searchNear(particles, topology);
       } else {
         computeSweptBoxes(particles, (window_end_ - substep_begin_) * dt_,

@@ -294,7 +294,6 @@ void SelfCollision::reserve(const Particles& particles, const ClothTopology& top
     }
   }
   leaf_changed_.assign(tree_.nodeCount(), 0);
-  triangle_corners_ = topology.triangles;
   particle_renewed_.assign(particles.cloth_count, 0);
   renewed_.clear();
   renewed_.reserve(particles.cloth_count);
@@ -357,11 +356,7 @@ void SelfCollision::findPairs(const Particles& p, const ClothTopology& topology,
   const auto& tri = topology.triangles;
   triangle_lo_.resize(triangles);
   triangle_hi_.resize(triangles);
-  for (int t = 0; t < triangles; ++t) {
-    const unsigned a = tri[3 * t], b = tri[3 * t + 1], c = tri[3 * t + 2];
-    triangle_lo_[t] = grown_lo_[a].cwiseMin(grown_lo_[b]).cwiseMin(grown_lo_[c]);
-    triangle_hi_[t] = grown_hi_[a].cwiseMax(grown_hi_[b]).cwiseMax(grown_hi_[c]);
-  }
+  for (int t = 0; t < triangles; ++t) boxTriangle(t, tri);
   if (edge_pairs) {
     const int edges = static_cast<int>(edges_.size());
     edge_lo_.resize(edges);
@@ -396,8 +391,24 @@ void SelfCollision::findPairs(const Particles& p, const ClothTopology& topology,
   }
 }
 
+void SelfCollision::markLeavesOf(int v) {
+  for (int k = vertex_triangle_offsets_[v]; k < vertex_triangle_offsets_[v + 1]; ++k) {
+    const int leaf = tree_.leafOf(vertex_triangles_[k]);
+    if (!leaf_changed_[leaf]) {
+      leaf_changed_[leaf] = 1;
+      changed_leaves_.push_back(leaf);
+    }
+  }
+}
+
+void SelfCollision::boxTriangle(int t, const std::vector<unsigned>& tri) {
+  const unsigned a = tri[3 * t], b = tri[3 * t + 1], c = tri[3 * t + 2];
+  triangle_lo_[t] = grown_lo_[a].cwiseMin(grown_lo_[b]).cwiseMin(grown_lo_[c]);
+  triangle_hi_[t] = grown_hi_[a].cwiseMax(grown_hi_[b]).cwiseMax(grown_hi_[c]);
+}
+
 const std::vector<int>& SelfCollision::renewedAround(const std::vector<int>& leavers,
-                                                     int particles) {
+                                                     const ClothTopology& topology, int particles) {
   // The leaves that hold a leaver are searched again anyway; so are their particles renewed,
   // which on paths of before the leaver's change of velocity would leave theirs a substep later
   // one by one, each with a search of its own: every corner of those leaves whose triangles all
@@ -405,13 +416,7 @@ const std::vector<int>& SelfCollision::renewedAround(const std::vector<int>& lea
   changed_leaves_.clear();
   for (int v : leavers) {
     if (v >= particles) continue;
-    for (int k = vertex_triangle_offsets_[v]; k < vertex_triangle_offsets_[v + 1]; ++k) {
-      const int leaf = tree_.leafOf(vertex_triangles_[k]);
-      if (!leaf_changed_[leaf]) {
-        leaf_changed_[leaf] = 1;
-        changed_leaves_.push_back(leaf);
-      }
-    }
+    markLeavesOf(v);
   }
   renewed_.clear();
   for (int v : leavers) {
@@ -424,7 +429,7 @@ const std::vector<int>& SelfCollision::renewedAround(const std::vector<int>& lea
     const TriangleTree::Node& n = tree_.node(leaf);
     for (int s = n.first; s < n.first + n.count; ++s) {
       for (int e = 0; e < 3; ++e) {
-        const int v = static_cast<int>(triangle_corners_[3 * tree_.triangle(s) + e]);
+        const int v = static_cast<int>(topology.triangles[3 * tree_.triangle(s) + e]);
         if (v >= particles || particle_renewed_[v]) continue;
         bool inside = true;
         for (int k = vertex_triangle_offsets_[v]; inside && k < vertex_triangle_offsets_[v + 1];
@@ -454,24 +459,13 @@ void SelfCollision::findPairsNear(const Particles& p, const ClothTopology& topol
     if (v >= p.cloth_count) continue;
     grown_lo_[v] = bounds.lo[v].array() - half;
     grown_hi_[v] = bounds.hi[v].array() + half;
-    for (int k = vertex_triangle_offsets_[v]; k < vertex_triangle_offsets_[v + 1]; ++k) {
-      const int leaf = tree_.leafOf(vertex_triangles_[k]);
-      if (!leaf_changed_[leaf]) {
-        leaf_changed_[leaf] = 1;
-        changed_leaves_.push_back(leaf);
-      }
-    }
+    markLeavesOf(v);
   }
   std::sort(changed_leaves_.begin(), changed_leaves_.end());
   const auto& tri = topology.triangles;
   for (int leaf : changed_leaves_) {
     const TriangleTree::Node& n = tree_.node(leaf);
-    for (int s = n.first; s < n.first + n.count; ++s) {
-      const int t = tree_.triangle(s);
-      const unsigned a = tri[3 * t], b = tri[3 * t + 1], c = tri[3 * t + 2];
-      triangle_lo_[t] = grown_lo_[a].cwiseMin(grown_lo_[b]).cwiseMin(grown_lo_[c]);
-      triangle_hi_[t] = grown_hi_[a].cwiseMax(grown_hi_[b]).cwiseMax(grown_hi_[c]);
-    }
+    for (int s = n.first; s < n.first + n.count; ++s) boxTriangle(tree_.triangle(s), tri);
   }
   tree_.mark(changed_leaves_);
   tree_.refitMarked(tri, triangle_lo_, triangle_hi_, bounds.path_start, bounds.path_move);

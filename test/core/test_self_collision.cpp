@@ -517,7 +517,7 @@ void expectLocalSearchListsEveryClosePair(const SceneConfig& scene,
       at.position[i] += Vec3(0.9 * h, -0.9 * h, 0.9 * h);
       at.velocity[i] = -at.velocity[i] + Vec3(0.1, 0.0, -0.2);
     }
-    const std::vector<int> renewed = search.renewedAround(leavers, at.cloth_count);
+    const std::vector<int> renewed = search.renewedAround(leavers, topology, at.cloth_count);
     renewed_total += static_cast<long>(renewed.size());
     for (int i : renewed) bound(i);
     search.findPairsNear(at, topology, bounds, h, renewed);
