@@ -1,6 +1,7 @@
 #include "pbd_cloth/ros/ros_conversions.h"
 
 #include <cstdint>
+#include <vector>
 
 #include "pbd_cloth/cloth_builder.h"
 #include "pbd_cloth/shapes.h"
@@ -23,6 +24,11 @@ std_msgs::ColorRGBA color(float r, float g, float b, float a = 1.0f) {
 constexpr double kPlaneMarkerSize = 4.0;
 // Thickness of that square (m): thin, but thick enough not to flicker against the cloth on it.
 constexpr double kPlaneMarkerThickness = 0.002;
+
+// How far behind the front the back side is drawn, in cloth thicknesses (the particle radius):
+// the back's triangles on the front's would fight for the same depth, and a flat cloth showed
+// dark specks of its back through its front (doc/hanging.png, 2026-11-27).
+constexpr double kBackSideDepth = 0.5;
 
 // Centre of the cloth grid as built (before it moves), where a plane's square is centred.
 Vec3 initialClothCentre(const ClothConfig& cloth) {
@@ -138,6 +144,35 @@ bool RosConversions::toMeshMarker(const Simulation& sim, const std_msgs::Header&
     marker.points[k] = toPoint(position[triangles[k]]);
   }
   return true;
+}
+
+void RosConversions::toBackMarker(const Simulation& sim, const visualization_msgs::Marker& mesh,
+                                  visualization_msgs::Marker& back) {
+  back = mesh;
+  back.ns = "cloth_back";
+  back.color = color(0.6f, 0.25f, 0.15f);
+  // Each particle's normal: the sum of its triangles' cross products (area-weighted), so the
+  // back follows the cloth's surface through folds and corners alike.
+  const std::vector<unsigned>& triangles = sim.topology().triangles;
+  const Vec3Array& position = sim.particles().position;
+  std::vector<Vec3> normal(position.size(), Vec3::Zero());
+  for (std::size_t k = 0; k + 2 < triangles.size(); k += 3) {
+    const Vec3& a = position[triangles[k]];
+    const Vec3 n = (position[triangles[k + 1]] - a).cross(position[triangles[k + 2]] - a);
+    for (int corner = 0; corner < 3; ++corner) normal[triangles[k + corner]] += n;
+  }
+  const double depth = kBackSideDepth * sim.scene().cloth.thickness;
+  for (std::size_t k = 0; k < triangles.size(); ++k) {
+    const Vec3& n = normal[triangles[k]];
+    const double length = n.norm();
+    // A particle whose triangles cancel (a degenerate or folded-flat spot) keeps its position.
+    const Vec3 p =
+        length > 0.0 ? Vec3(position[triangles[k]] - (depth / length) * n) : position[triangles[k]];
+    back.points[k] = toPoint(p);
+  }
+  for (std::size_t k = 0; k + 2 < back.points.size(); k += 3) {
+    std::swap(back.points[k + 1], back.points[k + 2]);
+  }
 }
 
 void RosConversions::toParticleMarkers(const Simulation& sim, const std_msgs::Header& header,
@@ -262,15 +297,8 @@ void RosConversions::toMarkerArray(const Simulation& sim, const std_msgs::Header
   markers.markers.clear();
   visualization_msgs::Marker mesh;
   if (toMeshMarker(sim, header, mesh)) {
-    // rviz lights a TRIANGLE_LIST from one side only; seen from behind the cloth was black. Its
-    // back is the same triangles wound the other way, a shade darker (ns cloth_back), so both
-    // sides are lit and the two sides of a fold tell apart.
-    visualization_msgs::Marker back = mesh;
-    back.ns = "cloth_back";
-    back.color = color(0.6f, 0.25f, 0.15f);
-    for (std::size_t k = 0; k + 2 < back.points.size(); k += 3) {
-      std::swap(back.points[k + 1], back.points[k + 2]);
-    }
+    visualization_msgs::Marker back;
+    toBackMarker(sim, mesh, back);
     markers.markers.push_back(mesh);
     markers.markers.push_back(back);
   }

@@ -71,9 +71,9 @@ const char kUsage[] =
     "  --mesh <file.obj>      final cloth as a Wavefront OBJ\n"
     "  --quiet                no progress message on stderr\n"
     "  --help                 this text\n"
-    "Bullet is built in single precision (Debian's libbullet-dev). Grippers, granular particles\n"
-    "and the bounds box are not simulated (a warning says so); cloth self-collision is off\n"
-    "(Bullet needs clusters for it). A diverged cloth (max strain > 10) reports\n"
+    "Bullet is built in single precision (Debian's libbullet-dev). Grippers, granular particles,\n"
+    "tethers and the bounds box are not simulated (a warning says so); cloth self-collision is\n"
+    "off (Bullet needs clusters for it). A diverged cloth (max strain > 10) reports\n"
     "self_intersections=-1: not counted.\n";
 
 constexpr int kLargeScene = 5000;  // particles; above it the metrics are sampled every 10th step
@@ -369,6 +369,9 @@ void warnAboutUnsupported(const pbd_cloth::SceneConfig& scene) {
   }
   if (scene.cloth.self_collision) {
     std::cerr << "bullet_cloth_bench: warning: cloth self-collision is off in Bullet\n";
+  }
+  if (scene.cloth.tethers) {
+    std::cerr << "bullet_cloth_bench: warning: cloth.tethers: Bullet's cloth has no tethers\n";
   }
 }
 

@@ -128,8 +128,8 @@ TEST(SimState, VerletContinuesBitForBit) {
 // A state's positions are taken as they are, pinned particles included (README "Saving and
 // restoring state"): a pinned corner moved 10 cm in the state is accepted, stays exactly there
 // through the steps after, and the cloth hangs from it (its neighbour follows within a link; with
-// tethers, as "Choosing a method" advises for a hanging cloth: without them the links at the pins
-// of hanging.yaml stretch by tens of per cent).
+// tethers, as "Choosing a method" advises for a hanging cloth and hanging.yaml has: without them
+// the links at its pins stretch by tens of per cent).
 TEST(SimState, PinnedParticlesStayWhereTheStatePutsThem) {
   SceneConfig scene = shippedScene("hanging.yaml", {"cloth.tethers=true"});
   Simulation sim(scene);

@@ -36,6 +36,13 @@ class RosConversions {
   static bool toMeshMarker(const Simulation& sim, const std_msgs::Header& header,
                            visualization_msgs::Marker& marker);
 
+  // ns `cloth_back`: rviz lights a TRIANGLE_LIST from one side only (seen from behind, the cloth
+  // was black), so the back is the mesh's triangles wound the other way, a shade darker (the two
+  // sides of a fold tell apart), drawn half a thickness behind the front along each particle's
+  // normal: on the front's own points the two would fight for the same depth.
+  static void toBackMarker(const Simulation& sim, const visualization_msgs::Marker& mesh,
+                           visualization_msgs::Marker& back);
+
   // ns `particles`: id 0 the cloth particles (kinematic ones highlighted), id 1 the granular ones,
   // each a SPHERE_LIST whose diameter is twice the contact radius.
   static void toParticleMarkers(const Simulation& sim, const std_msgs::Header& header,

@@ -1,0 +1,61 @@
+// The cloth's two sides in rviz (RosConversions::toMeshMarker, toBackMarker): the back is the
+// front's triangles wound the other way, half a thickness behind it, so neither fights the other
+// for depth (a flat cloth showed specks of its back through its front when they coincided).
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+
+#include "pbd_cloth/ros/ros_conversions.h"
+#include "pbd_cloth/simulation.h"
+
+namespace pbd_cloth {
+namespace {
+
+Vec3 at(const geometry_msgs::Point& p) { return Vec3(p.x, p.y, p.z); }
+
+// Unit normal of triangle k of a TRIANGLE_LIST, by its winding.
+Vec3 triangleNormal(const visualization_msgs::Marker& marker, std::size_t k) {
+  const Vec3 a = at(marker.points[3 * k]);
+  return (at(marker.points[3 * k + 1]) - a).cross(at(marker.points[3 * k + 2]) - a).normalized();
+}
+
+SceneConfig flatCloth(const Vec3& rpy) {
+  SceneConfig scene;
+  scene.cloth.rows = 5;
+  scene.cloth.cols = 4;
+  scene.cloth.spacing = 0.1;
+  scene.cloth.thickness = 0.008;
+  scene.cloth.rpy = rpy;
+  scene.cloth.self_collision = false;
+  return scene;
+}
+
+TEST(MeshMarkers, TheBackIsTheFrontTurnedOverHalfAThicknessBehind) {
+  for (const Vec3& rpy : {Vec3(0.0, 0.0, 0.0), Vec3(1.2, -0.4, 2.0)}) {
+    const Simulation sim(flatCloth(rpy));
+    std_msgs::Header header;
+    visualization_msgs::Marker front;
+    visualization_msgs::Marker back;
+    ASSERT_TRUE(RosConversions::toMeshMarker(sim, header, front));
+    RosConversions::toBackMarker(sim, front, back);
+    EXPECT_EQ(back.ns, "cloth_back");
+    ASSERT_EQ(back.points.size(), front.points.size());
+    ASSERT_EQ(front.points.size(), 3u * 2u * 4u * 3u);  // two triangles a cell
+    const double depth = 0.5 * sim.scene().cloth.thickness;
+    for (std::size_t k = 0; k < front.points.size() / 3; ++k) {
+      const Vec3 n = triangleNormal(front, k);
+      // Turned over: it faces the other way.
+      EXPECT_NEAR(triangleNormal(back, k).dot(n), -1.0, 1e-9) << "triangle " << k;
+      // Corner order 0, 2, 1, each moved by `depth` against the front's normal.
+      const int order[3] = {0, 2, 1};
+      for (int c = 0; c < 3; ++c) {
+        const Vec3 moved = at(back.points[3 * k + c]) - at(front.points[3 * k + order[c]]);
+        EXPECT_NEAR((moved + depth * n).norm(), 0.0, 1e-12)
+            << "triangle " << k << " corner " << c << ": moved " << moved.transpose();
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace pbd_cloth
