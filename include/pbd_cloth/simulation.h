@@ -63,6 +63,8 @@ class Simulation {
   // Direct access for tools and tests that set up a disturbance (a kick, an initial overlap).
   Particles& mutableParticles() { return particles_; }
   const ClothTopology& topology() const { return topology_; }
+  // The particles as built, the state reset() returns to.
+  const Particles& initialParticles() const { return initial_particles_; }
   const StepStats& stats() const { return solver_.stats(); }
   const Solver& solver() const { return solver_; }
 

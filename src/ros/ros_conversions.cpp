@@ -3,7 +3,6 @@
 #include <cstdint>
 #include <vector>
 
-#include "pbd_cloth/cloth_builder.h"
 #include "pbd_cloth/shapes.h"
 
 namespace pbd_cloth {
@@ -30,11 +29,13 @@ constexpr double kPlaneMarkerThickness = 0.002;
 // dark specks of its back through its front (doc/hanging.png, 2026-11-27).
 constexpr double kBackSideDepth = 0.5;
 
-// Centre of the cloth grid as built (before it moves), where a plane's square is centred.
-Vec3 initialClothCentre(const ClothConfig& cloth) {
-  const Vec3 half_grid(0.5 * (cloth.cols - 1) * cloth.spacing,
-                       -0.5 * (cloth.rows - 1) * cloth.spacing, 0.0);
-  return cloth.origin + rotationFromRpy(cloth.rpy) * half_grid;
+// Centre of the box around the cloth as built (before it moves), where a plane's square is
+// centred: a grid's or a mesh's alike (rows, cols and spacing say nothing about a mesh cloth).
+Vec3 initialClothCentre(const Simulation& sim) {
+  const Particles& initial = sim.initialParticles();
+  Eigen::AlignedBox3d box;
+  for (int i = 0; i < initial.cloth_count; ++i) box.extend(initial.position[i]);
+  return box.center();
 }
 
 // `local` (in the obstacle's frame) placed by the obstacle's pose.
@@ -268,7 +269,7 @@ void RosConversions::toObstacleMarkers(const Simulation& sim, const std_msgs::He
       case ShapeType::kPlane: {
         // A square below the cloth's starting place, its top face on the plane.
         const Vec3 centre = obstacle.pose.orientation.conjugate() *
-                            (initialClothCentre(sim.scene().cloth) - obstacle.pose.position);
+                            (initialClothCentre(sim) - obstacle.pose.position);
         const Vec3 on_plane = centre - (shape.normal.dot(centre) - shape.offset) * shape.normal;
         add(0, Marker::CUBE, on_plane - 0.5 * kPlaneMarkerThickness * shape.normal,
             Eigen::Quaterniond::FromTwoVectors(Vec3::UnitZ(), shape.normal),

@@ -4,8 +4,12 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <cstdio>
+#include <fstream>
+#include <string>
 
 #include "pbd_cloth/ros/ros_conversions.h"
+#include "pbd_cloth/scene_assets.h"
 #include "pbd_cloth/simulation.h"
 
 namespace pbd_cloth {
@@ -55,6 +59,42 @@ TEST(MeshMarkers, TheBackIsTheFrontTurnedOverHalfAThicknessBehind) {
       }
     }
   }
+}
+
+// A plane obstacle is drawn as a square centred below where the cloth starts: for a mesh cloth
+// too, whose place the grid's rows, cols and spacing do not describe.
+TEST(MeshMarkers, APlanesSquareIsCentredBelowTheClothAsBuilt) {
+  const std::string obj = testing::TempDir() + "pbd_cloth_plane_marker.obj";
+  {
+    // A 0.6 x 0.4 m rectangle of two triangles, corner (0, 0) at the file's origin.
+    std::ofstream out(obj);
+    out << "v 0 0 0\nv 0.6 0 0\nv 0.6 0.4 0\nv 0 0.4 0\nf 1 2 3\nf 1 3 4\n";
+  }
+  for (bool mesh : {false, true}) {
+    SceneConfig scene = flatCloth(Vec3(0.0, 0.0, 0.3));
+    scene.cloth.origin = Vec3(2.0, -1.0, 0.5);
+    if (mesh) {
+      scene.cloth.mesh = obj;
+      loadClothMesh(scene);
+    }
+    ObstacleConfig floor;
+    floor.name = "floor";
+    floor.shape = ShapeType::kPlane;
+    floor.normal = Vec3::UnitZ();
+    floor.offset = 0.1;
+    scene.obstacles.push_back(floor);
+    const Simulation sim(scene);
+    Eigen::AlignedBox3d box;
+    for (int i = 0; i < sim.particles().cloth_count; ++i) box.extend(sim.particles().position[i]);
+    visualization_msgs::MarkerArray markers;
+    RosConversions::toObstacleMarkers(sim, std_msgs::Header(), markers);
+    ASSERT_EQ(markers.markers.size(), 1u);
+    const geometry_msgs::Point& centre = markers.markers[0].pose.position;
+    EXPECT_NEAR(centre.x, box.center().x(), 1e-12) << (mesh ? "mesh" : "grid");
+    EXPECT_NEAR(centre.y, box.center().y(), 1e-12) << (mesh ? "mesh" : "grid");
+    EXPECT_LT(centre.z, floor.offset) << "the square's top face lies on the plane";
+  }
+  std::remove(obj.c_str());
 }
 
 }  // namespace
