@@ -165,8 +165,8 @@ class SelfCollision {
   void addEdgeEdge(int e, int f, const Particles& particles, const ClothTopology& topology,
                    const MotionBounds& bounds, double thickness);
   bool neighbours(int u, int v, const ClothTopology& topology) const;
-  // findPairsNear: marks the leaves of vertex v's triangles as changed (leaf_changed_,
-  // changed_leaves_).
+  // renewedAround, findPairsNear: marks the leaves of vertex v's triangles as changed
+  // (leaf_changed_, changed_leaves_).
   void markLeavesOf(int v);
   // Triangle t's box from its corners' grown boxes.
   void boxTriangle(int t, const std::vector<unsigned>& triangles);

@@ -156,23 +156,24 @@ void RosConversions::toBackMarker(const Simulation& sim, const visualization_msg
   // back follows the cloth's surface through folds and corners alike.
   const std::vector<unsigned>& triangles = sim.topology().triangles;
   const Vec3Array& position = sim.particles().position;
-  std::vector<Vec3> normal(position.size(), Vec3::Zero());
+  std::vector<Vec3> behind(position.size(), Vec3::Zero());
   for (std::size_t k = 0; k + 2 < triangles.size(); k += 3) {
     const Vec3& a = position[triangles[k]];
     const Vec3 n = (position[triangles[k + 1]] - a).cross(position[triangles[k + 2]] - a);
-    for (int corner = 0; corner < 3; ++corner) normal[triangles[k + corner]] += n;
+    for (int corner = 0; corner < 3; ++corner) behind[triangles[k + corner]] += n;
   }
+  // Then each particle's place on the back. One whose triangles cancel (a degenerate or
+  // folded-flat spot) keeps its position.
   const double depth = kBackSideDepth * sim.scene().cloth.thickness;
-  for (std::size_t k = 0; k < triangles.size(); ++k) {
-    const Vec3& n = normal[triangles[k]];
-    const double length = n.norm();
-    // A particle whose triangles cancel (a degenerate or folded-flat spot) keeps its position.
-    const Vec3 p =
-        length > 0.0 ? Vec3(position[triangles[k]] - (depth / length) * n) : position[triangles[k]];
-    back.points[k] = toPoint(p);
+  for (std::size_t i = 0; i < behind.size(); ++i) {
+    const double length = behind[i].norm();
+    behind[i] = length > 0.0 ? Vec3(position[i] - (depth / length) * behind[i]) : position[i];
   }
-  for (std::size_t k = 0; k + 2 < back.points.size(); k += 3) {
-    std::swap(back.points[k + 1], back.points[k + 2]);
+  // The front's triangles wound the other way: corners 0, 2, 1.
+  for (std::size_t k = 0; k + 2 < triangles.size(); k += 3) {
+    back.points[k] = toPoint(behind[triangles[k]]);
+    back.points[k + 1] = toPoint(behind[triangles[k + 2]]);
+    back.points[k + 2] = toPoint(behind[triangles[k + 1]]);
   }
 }
 

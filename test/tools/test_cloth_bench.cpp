@@ -56,6 +56,9 @@ std::map<std::string, std::string> keyValues(const std::string& text) {
 const std::string kSmall =
     " --quiet --set cloth.rows=10 --set cloth.cols=10 --set 'cloth.pinned=[0,9]'"
     " --set cloth.spacing=0.1";
+// The same without its tethers, whose strain falls with the substeps (with them, one substep
+// already meets the target searches' targets).
+const std::string kSmallUntethered = kSmall + " --set cloth.tethers=false";
 
 std::string readFile(const std::string& path) {
   std::ifstream in(path);
@@ -258,10 +261,6 @@ TEST(ClothBench, UrdfRobotSweptThroughTheClothPushesItWithoutPenetration) {
       << without.out;
   EXPECT_LT(maxY(alone), 0.01);
 }
-
-// The cloth without its tethers, whose strain falls with the substeps (with them, one substep
-// already meets the targets below).
-const std::string kSmallUntethered = kSmall + " --set cloth.tethers=false";
 
 // The search's answer meets the target, and one substep less at the same iterations does not:
 // it is the cheapest of its column, not just some setting that meets.
