@@ -15,7 +15,8 @@
 // With `interpolate` (solver.levels_interpolate, HPBD proper), the particles of the finer level
 // that a level does not hold follow the displacement of their coarse cell (bilinear), and the
 // coarse links weigh their ends by the cloth they carry. On config/swinging.yaml this gains energy
-// above 20 substeps (README, "The swinging cloth"); without it the links move their two ends only.
+// above 20 substeps (doc/performance.md, "HPBD's interpolation"); without it the links move their
+// two ends only.
 #pragma once
 
 #include <vector>

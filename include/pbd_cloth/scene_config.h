@@ -82,7 +82,8 @@ struct SolverConfig {
   // stretch compliance only: the links are inextensible.
   int levels = 0;
   // solver.levels_interpolate: HPBD's interpolation of each level's displacement to the finer
-  // particles. Off by default: it gains energy on the swinging cloth (measured; README).
+  // particles. Off by default: it gains energy on the swinging cloth (measured;
+  // doc/performance.md).
   bool levels_interpolate = false;
   // solver.max_speed (m/s): a free particle faster than this after a step means the step blew up
   // (its kinetic energy m v^2 / 2 per particle is out of bounds). Where fault recovery is on (the
@@ -95,7 +96,8 @@ struct SolverConfig {
   // solver.threads: threads that step the cloth (the calling one included): the stretch links of
   // a grid of 32 rows or more in blocks (stretch_links.h), prediction and velocity update in
   // ranges of particles. Bit-identical results for every count. 1 by default: a robot's computer
-  // runs more than this node, and a spinning worker competes with it (README "Threads").
+  // runs more than this node, and a spinning worker competes with it (doc/performance.md,
+  // "Threads").
   int threads = 1;
   // solver.search_window: substeps one contact search (particle-particle and self-collision
   // candidates) covers. 0 (the default): chosen per step from the last one's candidates

@@ -23,7 +23,7 @@ constexpr double kBoxSlack = 0.5;
 // substeps) per particle and search, and doubles below the second. Chosen on the drape from
 // 32 x 32 to 128 x 128 and fabric_table: 1 and 1/4 kept windows too long on the drape (64 x 64:
 // 21.8 against 18.0 ms a step with these), fabric_table keeps the whole step with any of them
-// (README "Self-collision: search windows").
+// (doc/performance.md, "Search windows").
 constexpr double kWindowHalves = 0.1;
 constexpr double kWindowDoubles = 0.025;
 // A local search (Collisions::searchNear) for at most this many leavers per 1024 particles.
@@ -353,9 +353,9 @@ double Collisions::project(Particles& particles, const ClothTopology& topology) 
                             : 0;
     if ((particle_contacts || self_collision) && (window_over || leavers > 0)) {
       // A few cloth particles off their bounds search again alone (a pass over the cloth for
-      // each would make the searches of a step grow with the cloth: README "Local searches");
-      // many, a new window, or particle-particle contacts, whose broad phase has no local form,
-      // the whole search.
+      // each would make the searches of a step grow with the cloth: doc/performance.md, "Local
+      // searches"); many, a new window, or particle-particle contacts, whose broad phase has no
+      // local form, the whole search.
       if (!window_over && self_collision && !particle_contacts &&
           leavers <= mostLocalLeavers(particles.size())) {
         searchNear(particles, topology);
