@@ -1,6 +1,7 @@
 // Microbenchmarks of the hot loops (Google Benchmark): nanoseconds per stretch and per bending
 // constraint projection, per collision test (sphere obstacle, particle pairs, cloth self-contact)
-// on a 50 x 50 cloth, and a whole step of config/hanging.yaml per method.
+// on a 50 x 50 cloth, and a whole step of config/hanging.yaml per method; and, as issue 12's
+// reference, what a direct solve of the swinging cloth's links costs (BM_Direct*).
 //
 //   cloth_microbench [--scene=<hanging.yaml>] [Google Benchmark flags, e.g.
 //                    --benchmark_format=csv --benchmark_min_time=0.2]
@@ -12,6 +13,9 @@
 // to the pure projection cost). Bending is the difference between a step with and one without
 // bending hinges, divided by the hinge count.
 #include <benchmark/benchmark.h>
+
+#include <Eigen/Sparse>
+#include <Eigen/SparseCholesky>
 
 #include <chrono>
 #include <cmath>
@@ -133,8 +137,11 @@ void BM_StretchProjection(benchmark::State& state) {
 // loop), against BM_StretchBareLoop: a bare loop doing the same XPBD arithmetic on the same flat
 // arrays, with none of the checks (kinematic ends, coincident particles, largest correction).
 struct StretchRig {
-  StretchRig() {
+  explicit StretchRig(int rows = 50) {
     SceneConfig scene = clothScene(Method::kXpbd, 1, false);
+    scene.cloth.rows = scene.cloth.cols = rows;  // the swinging cloth at rows x rows, 1 m
+    scene.cloth.spacing = 1.0 / (rows - 1);
+    scene.cloth.pinned = {0, rows - 1};
     scene.cloth.shear_diagonals = 2;
     scene.cloth.rpy = Eigen::Vector3d::Zero();  // flat, swinging down as config/swinging.yaml
     scene.solver.substeps = 20;
@@ -210,6 +217,91 @@ void BM_StretchBareLoop(benchmark::State& state) {
   }
   setCounters(state, count, total, count);
   state.SetLabel("bare loop, same arithmetic");
+}
+
+// A direct solve as the reference issue 12 names (fast projection, Goldenthal et al. 2007; Eigen's
+// SimplicialLDLT): one Newton step of the swinging cloth's inextensible links solves
+// (J W J^T + alpha~) dlambda = -C exactly, where one Gauss-Seidel pass of the solver takes each
+// link alone. The matrix of every stretch link (rows, columns, both diagonals) of StretchRig's
+// swinging state at rows x rows (arg): A_kl = sum over the particles p the links k and l share of
+// w_p s_kp s_lp (n_k . n_l), s = +-1 the particle's end of the link, n the link's direction.
+// alpha~ is 1e-9 of each link's own diagonal: 9702 links hold 7494 free coordinates at 50 x 50,
+// so J W J^T alone is singular. The ordering (AMD) is found once, outside the timing.
+struct DirectRig {
+  explicit DirectRig(int rows) : stretch(rows) {
+    const StretchLinks& links = stretch.links;
+    const int count = links.size();
+    direction.resize(count);
+    at.resize(stretch.position.size());
+    for (int k = 0; k < count; ++k) {
+      direction[k] = (stretch.position[links.i[k]] - stretch.position[links.j[k]]).normalized();
+      at[links.i[k]].push_back({k, 1.0});
+      at[links.j[k]].push_back({k, -1.0});
+    }
+    matrix.resize(count, count);
+    assemble();
+    ldlt.analyzePattern(matrix);
+  }
+  // A from the state's link directions, as a Newton step would at each iteration.
+  void assemble() {
+    triplets.clear();
+    for (std::size_t p = 0; p < at.size(); ++p) {
+      const double w = stretch.inverse_mass[p];
+      if (w == 0.0) continue;
+      for (const auto& [k, sk] : at[p]) {
+        for (const auto& [l, sl] : at[p]) {
+          triplets.emplace_back(k, l, w * sk * sl * direction[k].dot(direction[l]));
+        }
+      }
+    }
+    matrix.setFromTriplets(triplets.begin(), triplets.end());
+    for (int k = 0; k < matrix.rows(); ++k) matrix.coeffRef(k, k) *= 1.0 + 1e-9;
+  }
+  StretchRig stretch;
+  std::vector<Vec3> direction;
+  std::vector<std::vector<std::pair<int, double>>> at;  // each particle's links, with its sign
+  std::vector<Eigen::Triplet<double>> triplets;
+  Eigen::SparseMatrix<double> matrix;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
+};
+
+// Assembling and factorizing A: what each Newton iteration pays. ns_per_item: per link.
+void BM_DirectFactorize(benchmark::State& state) {
+  DirectRig rig(static_cast<int>(state.range(0)));
+  double total = 0.0;
+  for (auto _ : state) {
+    const Clock::time_point start = Clock::now();
+    rig.assemble();
+    rig.ldlt.factorize(rig.matrix);
+    benchmark::DoNotOptimize(rig.ldlt.info());
+    total += secondsSince(start);
+  }
+  if (rig.ldlt.info() != Eigen::Success) state.SkipWithError("factorization failed");
+  setCounters(state, rig.stretch.links.size(), total, rig.stretch.links.size());
+  state.SetLabel(
+      "SimplicialLDLT of J W J^T, nnz(L) " +
+      std::to_string(static_cast<long>(rig.ldlt.matrixL().nestedExpression().nonZeros())));
+}
+
+// One solve with the factors (forward and back substitution): the least a step of a frozen-matrix
+// Newton method would pay per iteration. ns_per_item: per link.
+void BM_DirectSolve(benchmark::State& state) {
+  DirectRig rig(static_cast<int>(state.range(0)));
+  rig.ldlt.factorize(rig.matrix);
+  const Eigen::VectorXd violation = Eigen::VectorXd::Ones(rig.matrix.rows());
+  Eigen::VectorXd dlambda;
+  double total = 0.0;
+  for (auto _ : state) {
+    const Clock::time_point start = Clock::now();
+    dlambda = rig.ldlt.solve(violation);
+    benchmark::DoNotOptimize(dlambda.data());
+    total += secondsSince(start);
+  }
+  // A solve that does not solve would time nothing worth knowing.
+  const double residual = (rig.matrix * dlambda - violation).norm() / violation.norm();
+  if (!(residual < 1e-6)) state.SkipWithError("the solve's relative residual is over 1e-6");
+  setCounters(state, rig.stretch.links.size(), total, rig.stretch.links.size());
+  state.SetLabel("forward and back substitution");
 }
 
 // ns per bending projection: a step with hinges minus the same step without, per hinge and pass.
@@ -580,6 +672,8 @@ BENCHMARK(BM_StretchProjection)
     ->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_StretchLinks)->ArgName("simd")->Arg(1)->Arg(0)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_StretchBareLoop)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_DirectFactorize)->ArgName("rows")->Arg(50)->Arg(100)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_DirectSolve)->ArgName("rows")->Arg(50)->Arg(100)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_BendProjection)
     ->ArgNames({"method", "passes"})
     ->Args({kXpbd, 10})
