@@ -194,7 +194,8 @@ SWINGING_VARIANTS = {
                                  {'variant': 'levels_2_threads'}, substeps_only([40, 60, 80])),
     # One diagonal per cell (cloth.shear_diagonals=1, the grid's default link set): the peers'
     # figures on these links given since issue 12 (Bender's PBD 160 x 1, Bullet 16 x 10; README
-    # and doc/performance.md, "On equal links") compare with these, the two-diagonal ones above with the issue's own.
+    # and doc/performance.md, "On equal links") compare with these, the two-diagonal ones above
+    # with the issue's own.
     'xpbd + levels, one diagonal': (['solver.levels=5', 'cloth.shear_diagonals=1'],
                                     {'variant': 'levels_one_diagonal'},
                                     substeps_only([40, 50, 60, 80])),

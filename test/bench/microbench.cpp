@@ -245,6 +245,12 @@ struct DirectRig {
   // A from the state's link directions, as a Newton step would at each iteration.
   void assemble() {
     triplets.clear();
+    // alpha~ on the diagonal, whose J W J^T entry is w_i + w_j (n_k . n_k = 1).
+    const StretchLinks& links = stretch.links;
+    for (int k = 0; k < links.size(); ++k) {
+      triplets.emplace_back(
+          k, k, 1e-9 * (stretch.inverse_mass[links.i[k]] + stretch.inverse_mass[links.j[k]]));
+    }
     for (std::size_t p = 0; p < at.size(); ++p) {
       const double w = stretch.inverse_mass[p];
       if (w == 0.0) continue;
@@ -254,8 +260,7 @@ struct DirectRig {
         }
       }
     }
-    matrix.setFromTriplets(triplets.begin(), triplets.end());
-    for (int k = 0; k < matrix.rows(); ++k) matrix.coeffRef(k, k) *= 1.0 + 1e-9;
+    matrix.setFromTriplets(triplets.begin(), triplets.end());  // sums duplicates
   }
   StretchRig stretch;
   std::vector<Vec3> direction;
