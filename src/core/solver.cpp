@@ -89,6 +89,8 @@ void Solver::prepare(const Particles& particles, const ClothTopology& topology) 
   jacobi_count_.assign(n, 0);
   force_.assign(n, Vec3::Zero());
   predicted_.assign(n, Vec3::Zero());
+  chebyshev_current_.assign(n, Vec3::Zero());
+  chebyshev_previous_.assign(n, Vec3::Zero());
   kinematic_velocity_.assign(n, Vec3::Zero());
   kinematic_particles_.clear();
   kinematic_particles_.reserve(n);
@@ -608,6 +610,36 @@ double Solver::projectPass(double h, Particles& p, const ClothTopology& topology
   return max_change;
 }
 
+// solver.chebyshev: the Chebyshev semi-iterative method over a substep's passes (Wang 2015, "A
+// Chebyshev Semi-Iterative Approach for Accelerating Projective and Position-based Dynamics",
+// section 4). Pass k's result q^ is replaced by q^{k+1} = omega_{k+1} (q^ - q^{k-1}) + q^{k-1},
+// with omega_1 = 2 / (2 - rho^2) at the first extrapolated pass and omega_{k+1} = 4 / (4 - rho^2
+// omega_k) after it: the weights of the Chebyshev polynomials that damp every error mode whose
+// factor per pass is at most rho. Pass 0 has no q^{k-1}, and the last pass is not extrapolated so
+// that the substep ends with the contacts that pass projected (free of penetration) and the
+// velocity update sees a projected state, not an extrapolated one.
+// Whether pass `pass` keeps the positions it starts from: every pass before the last one does, so
+// that pass k >= 1 finds q^{k-1} in chebyshev_previous_.
+bool Solver::chebyshevKeeps(int pass) const {
+  return config_.chebyshev > 0.0 && pass + 1 < config_.iterations;
+}
+
+void Solver::accelerate(int pass, Particles& p) {
+  const double rho2 = config_.chebyshev * config_.chebyshev;
+  chebyshev_omega_ = pass == 1 ? 2.0 / (2.0 - rho2) : 4.0 / (4.0 - rho2 * chebyshev_omega_);
+  const double omega = chebyshev_omega_;
+  const int n = p.size();
+  const int threads = pool_.threads();
+  auto job = [&](int t) {
+    const int end = WorkerPool::rangeBegin(n, t + 1, threads);
+    for (int i = WorkerPool::rangeBegin(n, t, threads); i < end; ++i) {
+      if (p.inverse_mass[i] == 0.0) continue;  // kinematic: its path is prescribed
+      p.position[i] = chebyshev_previous_[i] + omega * (p.position[i] - chebyshev_previous_[i]);
+    }
+  };
+  pool_.run(job);
+}
+
 // Velocity update of PBD, v = (x - x_prev) / h; for Verlet this is the implicit velocity
 // x_n - x_{n-1} the next step adds. Written as v = v~ + (x - x~) / h, x~ = x_prev + h v~ the
 // prediction: the same value, but a particle no constraint moved keeps its velocity exactly
@@ -833,7 +865,12 @@ void Solver::step(double dt, Particles& p, const ClothTopology& topology, Collis
     if (!flatBend(topology)) std::fill(bend_lambda_.begin(), bend_lambda_.end(), Vec3::Zero());
     for (int pass = 0; pass < config_.iterations; ++pass) {
       ++stats_.iterations;
+      if (chebyshevKeeps(pass)) {
+        std::swap(chebyshev_previous_, chebyshev_current_);  // no copy: the buffers trade places
+        chebyshev_current_ = p.position;                     // same size: no allocation
+      }
       const double max_change = projectPass(h, p, topology, collisions, pass == 0);
+      if (pass >= 1 && chebyshevKeeps(pass)) accelerate(pass, p);
       // Adaptive count (seed: "measuring the change from last iteration").
       if (tracksLargestChange() && max_change < config_.tolerance) break;
     }

@@ -223,7 +223,8 @@ void readSolver(const YAML::Node& node, SolverConfig& s) {
                                        "levels",           "levels_interpolate",
                                        "max_speed",        "simd",
                                        "threads",          "sleep_speed",
-                                       "sleep_time",       "search_window"});
+                                       "sleep_time",       "search_window",
+                                       "chebyshev"});
   if (map.has("method")) {
     s.method = toWord(map.get("method"), map.keyOf("method"),
                       {Method::kXpbd, Method::kPbd, Method::kVerlet, Method::kMassSpring});
@@ -246,6 +247,7 @@ void readSolver(const YAML::Node& node, SolverConfig& s) {
   map.read("bend_spring_stiffness", s.bend_spring_stiffness);
   map.read("levels", s.levels);
   map.read("levels_interpolate", s.levels_interpolate);
+  map.read("chebyshev", s.chebyshev);
   map.read("max_speed", s.max_speed);
   map.read("simd", s.simd);
   map.read("threads", s.threads);

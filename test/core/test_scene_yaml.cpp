@@ -374,6 +374,8 @@ INSTANTIATE_TEST_SUITE_P(
         BadValue{"solver.tolerance=-1", "solver.tolerance", ">= 0"},
         BadValue{"solver.relaxation=2", "solver.relaxation", "(0, 2)"},
         BadValue{"solver.relaxation=0", "solver.relaxation", "(0, 2)"},
+        BadValue{"solver.chebyshev=1", "solver.chebyshev", "[0, 1)"},
+        BadValue{"solver.chebyshev=-0.1", "solver.chebyshev", "[0, 1)"},
         BadValue{"solver.gravity=[0, 0, .inf]", "solver.gravity", "finite"},
         BadValue{"solver.gravity=[0, 0]", "solver.gravity", "3 numbers"},
         BadValue{"solver.damping=-0.1", "solver.damping", ">= 0"},
