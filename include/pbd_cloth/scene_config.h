@@ -89,7 +89,8 @@ struct SolverConfig {
   // "A Chebyshev Semi-Iterative Approach for Accelerating Projective and Position-based Dynamics")
   // assumes for a substep's passes: from the second pass on, each pass's result is extrapolated
   // from the one two passes back by omega_k (Solver::accelerate). It needs solver.iterations >= 3
-  // (the last pass is never extrapolated). 0 = off (the default): on the swinging cloth its passes
+  // (the last pass is never extrapolated); a gripper's reported force counts the passes' own
+  // corrections, not the extrapolation. 0 = off (the default): on the swinging cloth its passes
   // cost what the substeps they save cost, and some splits blow up at rho 0.95
   // (doc/performance.md, "Chebyshev acceleration").
   double chebyshev = 0.0;
