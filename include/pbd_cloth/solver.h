@@ -122,13 +122,12 @@ class Solver {
   Vec3Array predicted_;            // x~ = x_prev + h v~ of the current substep (free particles)
   std::vector<int> kinematic_particles_;  // the step's kinematic particles (startReactions)
   Vec3Array kinematic_velocity_;          // a kinematic particle's velocity kept across predict()
-  // solver.chebyshev: each free particle's position before the current pass (q^k) and before the
-  // one before it (q^{k-1}), and the weight of the last extrapolation (Solver::accelerate).
+  // solver.chebyshev: each particle's position before the current pass (q^k) and before the one
+  // before it (q^{k-1}) (Solver::accelerate).
   Vec3Array chebyshev_current_;
   Vec3Array chebyshev_previous_;
-  double chebyshev_omega_ = 1.0;
   bool chebyshevKeeps(int pass) const;
-  void accelerate(int pass, Particles& p);
+  double accelerate(int pass, double omega, Particles& p);
   // Reactions on kinematic particles: the stretch constraints and hinges with a kinematic and a
   // free particle (listed once per step), the sum of gradient times multiplier over the step
   // (kg m), the velocities at the step start, and the two forces of the last step.

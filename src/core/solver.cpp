@@ -626,10 +626,10 @@ bool Solver::chebyshevKeeps(int pass) const {
 // velocity update sees a projected state, not an extrapolated one. The multipliers are not
 // extrapolated: a gripper's reported force (addMultiplierReactions) counts the passes' own
 // corrections only.
-void Solver::accelerate(int pass, Particles& p) {
+// Returns omega_{k+1}, given the last pass's omega_k (unused at the first extrapolated pass).
+double Solver::accelerate(int pass, double omega, Particles& p) {
   const double rho2 = config_.chebyshev * config_.chebyshev;
-  chebyshev_omega_ = pass == 1 ? 2.0 / (2.0 - rho2) : 4.0 / (4.0 - rho2 * chebyshev_omega_);
-  const double omega = chebyshev_omega_;
+  omega = pass == 1 ? 2.0 / (2.0 - rho2) : 4.0 / (4.0 - rho2 * omega);
   const int n = p.size();
   const int threads = pool_.threads();
   auto job = [&](int t) {
@@ -640,6 +640,7 @@ void Solver::accelerate(int pass, Particles& p) {
     }
   };
   pool_.run(job);
+  return omega;
 }
 
 // Velocity update of PBD, v = (x - x_prev) / h; for Verlet this is the implicit velocity
@@ -865,6 +866,7 @@ void Solver::step(double dt, Particles& p, const ClothTopology& topology, Collis
     }
     // The flat hinges' first pass writes theirs (projectFlatHinges, lambda_from_zero).
     if (!flatBend(topology)) std::fill(bend_lambda_.begin(), bend_lambda_.end(), Vec3::Zero());
+    double omega = 1.0;  // solver.chebyshev: the last extrapolation's weight in this substep
     for (int pass = 0; pass < config_.iterations; ++pass) {
       ++stats_.iterations;
       if (chebyshevKeeps(pass)) {
@@ -872,7 +874,7 @@ void Solver::step(double dt, Particles& p, const ClothTopology& topology, Collis
         chebyshev_current_ = p.position;                     // same size: no allocation
       }
       const double max_change = projectPass(h, p, topology, collisions, pass == 0);
-      if (pass >= 1 && chebyshevKeeps(pass)) accelerate(pass, p);
+      if (pass >= 1 && chebyshevKeeps(pass)) omega = accelerate(pass, omega, p);
       // Adaptive count (seed: "measuring the change from last iteration").
       if (tracksLargestChange() && max_change < config_.tolerance) break;
     }
