@@ -123,9 +123,11 @@ class Solver {
   std::vector<int> kinematic_particles_;  // the step's kinematic particles (startReactions)
   Vec3Array kinematic_velocity_;          // a kinematic particle's velocity kept across predict()
   // solver.chebyshev: each particle's position before the current pass (q^k) and before the one
-  // before it (q^{k-1}) (Solver::accelerate).
+  // before it (q^{k-1}) (Solver::accelerate). Empty while the option is off (48 bytes a particle
+  // otherwise); configure() and prepare() size them, never a step.
   Vec3Array chebyshev_current_;
   Vec3Array chebyshev_previous_;
+  void sizeChebyshevBuffers();
   bool chebyshevKeeps(int pass) const;
   double accelerate(int pass, double omega, Particles& p);
   // Reactions on kinematic particles: the stretch constraints and hinges with a kinematic and a

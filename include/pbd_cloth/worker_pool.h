@@ -1,5 +1,6 @@
 // A fixed set of worker threads for the solver step (solver.threads): run(job) calls job(t) once
-// for every t in [0, threads), the calling thread taking t = 0, and returns when all are done.
+// for every t in [0, threads), the calling thread taking t = 0, and returns when all are done;
+// runRanges(count, range) does the same over equal consecutive ranges of count items.
 // Which work each t does is the caller's fixed partition, so results never depend on timing.
 //
 // Workers spin briefly between jobs (a substep syncs a few times within microseconds), then sleep
@@ -30,6 +31,15 @@ class WorkerPool {
   // consecutive ranges: t takes [rangeBegin(count, t, threads), rangeBegin(count, t + 1, threads)).
   static int rangeBegin(int count, int t, int threads) {
     return static_cast<int>(static_cast<long>(count) * t / threads);
+  }
+
+  // Splits [0, count) into one range a thread (rangeBegin) and calls range(begin, end, t) on
+  // thread t: which items a thread takes depends only on count and the thread count.
+  template <typename Range>
+  void runRanges(int count, Range&& range) {
+    const int n = threads();
+    auto job = [&](int t) { range(rangeBegin(count, t, n), rangeBegin(count, t + 1, n), t); };
+    run(job);
   }
 
   template <typename Job>

@@ -434,11 +434,7 @@ double Collisions::projectObstaclesAndBounds(Particles& p, bool first_pass) {
   };
   if (threads == 1) return range(0, p.size());
   double* max_change = thread_max_change_;
-  auto job = [&](int t) {
-    max_change[t] = range(WorkerPool::rangeBegin(p.size(), t, threads),
-                          WorkerPool::rangeBegin(p.size(), t + 1, threads));
-  };
-  pool_->run(job);
+  pool_->runRanges(p.size(), [&](int begin, int end, int t) { max_change[t] = range(begin, end); });
   return *std::max_element(max_change, max_change + threads);
 }
 

@@ -73,6 +73,19 @@ void Solver::configure(const SolverConfig& solver, const ClothConfig& cloth) {
       (coarse_.requested() != config_.levels || coarse_.spacing() != spacing_)) {
     coarse_.build(coarse_.rows(), coarse_.cols(), spacing_, config_.levels);
   }
+  sizeChebyshevBuffers();  // solver.chebyshev may have been switched on or off
+}
+
+// One position a particle for each buffer while solver.chebyshev is on (predicted_ has the
+// particle count prepare() saw); released while it is off.
+void Solver::sizeChebyshevBuffers() {
+  if (config_.chebyshev > 0.0) {
+    chebyshev_current_.assign(predicted_.size(), Vec3::Zero());
+    chebyshev_previous_.assign(predicted_.size(), Vec3::Zero());
+  } else {
+    Vec3Array().swap(chebyshev_current_);
+    Vec3Array().swap(chebyshev_previous_);
+  }
 }
 
 void Solver::prepare(const Particles& particles, const ClothTopology& topology) {
@@ -89,8 +102,7 @@ void Solver::prepare(const Particles& particles, const ClothTopology& topology) 
   jacobi_count_.assign(n, 0);
   force_.assign(n, Vec3::Zero());
   predicted_.assign(n, Vec3::Zero());
-  chebyshev_current_.assign(n, Vec3::Zero());
-  chebyshev_previous_.assign(n, Vec3::Zero());
+  sizeChebyshevBuffers();
   kinematic_velocity_.assign(n, Vec3::Zero());
   kinematic_particles_.clear();
   kinematic_particles_.reserve(n);
@@ -270,12 +282,9 @@ void Solver::predict(double h, double s_end, Particles& p) {
   if (n == 0) return;
   const double keep = dampingFactor(h);
   const Vec3 dv = h * config_.gravity;
-  const int threads = pool_.threads();
   const bool avx2 = config_.simd && stretchLinksUseAvx2();
   // Threads take equal ranges of particles (each particle on its own).
-  auto job = [&](int t) {
-    const int begin = WorkerPool::rangeBegin(n, t, threads);
-    const int end = WorkerPool::rangeBegin(n, t + 1, threads);
+  pool_.runRanges(n, [&](int begin, int end, int) {
     for (int i : kinematic_particles_) {
       if (i >= begin && i < end) kinematic_velocity_[i] = p.velocity[i];
     }
@@ -288,8 +297,7 @@ void Solver::predict(double h, double s_end, Particles& p) {
       p.velocity[i] = kinematic_velocity_[i];
       p.position[i] = (1.0 - s_end) * p.kinematic_from[i] + s_end * p.kinematic_to[i];
     }
-  };
-  pool_.run(job);
+  });
 }
 
 // Jacobi with averaging scales constraint c's multiplier step by w / max_k n_k over its free
@@ -461,12 +469,9 @@ double Solver::projectFlatBend(Particles& p, const ClothTopology& topology, bool
   const int groups[3] = {0, topology.bend_blocks, static_cast<int>(task.size()) - 1};
   for (int g = 0; g < 2; ++g) {
     const int tasks = groups[g + 1] - groups[g];
-    auto job = [&](int t) {
-      const int first = groups[g] + WorkerPool::rangeBegin(tasks, t, threads);
-      const int last = groups[g] + WorkerPool::rangeBegin(tasks, t + 1, threads);
-      thread_results_[t].max_change = sweep(task[first], task[last]);
-    };
-    pool_.run(job);
+    pool_.runRanges(tasks, [&](int first, int last, int t) {
+      thread_results_[t].max_change = sweep(task[groups[g] + first], task[groups[g] + last]);
+    });
     for (int t = 0; t < threads; ++t) {
       max_change = std::max(max_change, thread_results_[t].max_change);
     }
@@ -630,16 +635,12 @@ bool Solver::chebyshevKeeps(int pass) const {
 double Solver::accelerate(int pass, double omega, Particles& p) {
   const double rho2 = config_.chebyshev * config_.chebyshev;
   omega = pass == 1 ? 2.0 / (2.0 - rho2) : 4.0 / (4.0 - rho2 * omega);
-  const int n = p.size();
-  const int threads = pool_.threads();
-  auto job = [&](int t) {
-    const int end = WorkerPool::rangeBegin(n, t + 1, threads);
-    for (int i = WorkerPool::rangeBegin(n, t, threads); i < end; ++i) {
+  pool_.runRanges(p.size(), [&](int begin, int end, int) {
+    for (int i = begin; i < end; ++i) {
       if (p.inverse_mass[i] == 0.0) continue;  // kinematic: its path is prescribed
       p.position[i] = chebyshev_previous_[i] + omega * (p.position[i] - chebyshev_previous_[i]);
     }
-  };
-  pool_.run(job);
+  });
   return omega;
 }
 
@@ -653,19 +654,15 @@ void Solver::updateVelocities(double h, Particles& p) {
   const int n = p.size();
   if (n == 0) return;
   const double inv_h = 1.0 / h;
-  const int threads = pool_.threads();
   const bool avx2 = config_.simd && stretchLinksUseAvx2();
-  auto job = [&](int t) {
-    const int begin = WorkerPool::rangeBegin(n, t, threads);
-    const int end = WorkerPool::rangeBegin(n, t + 1, threads);
+  pool_.runRanges(n, [&](int begin, int end, int) {
     updateFree(3 * begin, 3 * end, inv_h, p.position.front().data(), predicted_.front().data(),
                p.velocity.front().data(), avx2);
     // A kinematic particle's velocity is the one it moved with: (x - x_start) / h.
     for (int i : kinematic_particles_) {
       if (i >= begin && i < end) p.velocity[i] = (p.position[i] - p.substep_start[i]) * inv_h;
     }
-  };
-  pool_.run(job);
+  });
 }
 
 // The explicit baseline: spring and damper forces, then symplectic Euler. Stable only while

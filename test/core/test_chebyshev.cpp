@@ -84,5 +84,30 @@ TEST(Chebyshev, KeepsPinsAndIsTheSameOnTwoThreads) {
   EXPECT_TRUE(one.particles().velocity == two.particles().velocity);
 }
 
+// The option switched on, and off again, in a running scene (Simulation::setSolverConfig, as the
+// node's reconfigure does) gives the same bits as a scene built with that setting: the two
+// buffers of the extrapolation are sized on the switch, not only when the scene is built.
+TEST(Chebyshev, SwitchedAtRunTimeIsTheSameAsBuiltWithIt) {
+  const SceneConfig plain = swingingCloth(2, 6, 0.0);
+  const SceneConfig accelerated = swingingCloth(2, 6, 0.9);
+  Simulation switched(plain);
+  Simulation built(accelerated);
+  switched.setSolverConfig(accelerated.solver);
+  for (int k = 0; k < 10; ++k) {
+    switched.step();
+    built.step();
+  }
+  EXPECT_TRUE(switched.particles().position == built.particles().position);
+  Simulation built_plain(plain);
+  built_plain.setSolverConfig(accelerated.solver);
+  built_plain.setSolverConfig(plain.solver);
+  Simulation never(plain);
+  for (int k = 0; k < 10; ++k) {
+    built_plain.step();
+    never.step();
+  }
+  EXPECT_TRUE(built_plain.particles().position == never.particles().position);
+}
+
 }  // namespace
 }  // namespace pbd_cloth
