@@ -98,15 +98,15 @@ TEST(Chebyshev, SwitchedAtRunTimeIsTheSameAsBuiltWithIt) {
     built.step();
   }
   EXPECT_TRUE(switched.particles().position == built.particles().position);
-  Simulation built_plain(plain);
-  built_plain.setSolverConfig(accelerated.solver);
-  built_plain.setSolverConfig(plain.solver);
+  Simulation switched_back(plain);
+  switched_back.setSolverConfig(accelerated.solver);
+  switched_back.setSolverConfig(plain.solver);
   Simulation never(plain);
   for (int k = 0; k < 10; ++k) {
-    built_plain.step();
+    switched_back.step();
     never.step();
   }
-  EXPECT_TRUE(built_plain.particles().position == never.particles().position);
+  EXPECT_TRUE(switched_back.particles().position == never.particles().position);
 }
 
 }  // namespace
