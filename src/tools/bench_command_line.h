@@ -1,15 +1,23 @@
-// The command line that cloth_bench and bullet_cloth_bench share: both take the same options and
-// print the same key=value line, so the charts compare the two on equal terms. Header-only: the
-// two tools are its only users.
+// The command line that cloth_bench and bullet_cloth_bench share: both take the same options,
+// read the scene the same way, write the same --csv rows and print the same key=value line, so
+// the charts compare the two on equal terms. Header-only: the two tools are its only users.
 #pragma once
 
+#include <yaml-cpp/yaml.h>
+
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <functional>
+#include <iostream>
 #include <limits>
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include "pbd_cloth/metrics.h"
+#include "pbd_cloth/scene_config.h"
+#include "pbd_cloth/scene_yaml.h"
 
 namespace pbd_cloth {
 namespace bench {
@@ -131,6 +139,46 @@ inline void finishOutput(std::ofstream& out, const std::string& path) {
   if (!out.is_open()) return;
   out.close();
   if (!out) throw std::runtime_error("writing '" + path + "' failed");
+}
+
+// The scene of --config with every --set applied in order; the reader's warnings go to stderr.
+inline SceneConfig loadScene(const CommonOptions& options) {
+  YAML::Node root = loadSceneYaml(options.config);
+  for (const std::string& assignment : options.overrides) applyOverride(root, assignment);
+  SceneConfig scene = sceneFromYaml(root, sceneFileDirectory(options.config));
+  for (const std::string& warning : scene.load_warnings) {
+    std::fprintf(stderr, "warning: %s\n", warning.c_str());
+  }
+  return scene;
+}
+
+// --csv: one row per metric sample, under this header.
+inline void writeCsvHeader(std::ofstream& csv) {
+  if (csv.is_open()) csv << "t,max_strain,mean_strain,energy,max_penetration\n";
+}
+
+inline void writeCsvRow(std::ofstream& csv, double t, const Metrics& m) {
+  if (!csv.is_open()) return;
+  csv << t << ',' << m.max_strain << ',' << m.mean_strain << ',' << m.energy << ','
+      << m.max_penetration << '\n';
+}
+
+// main() of both tools: the exit status of run(), or what it threw as a message that names the
+// tool: 2 for a bad command line or scene key, 1 for anything else.
+template <typename Run>
+int runTool(const char* tool, Run&& run) {
+  try {
+    return run();
+  } catch (const UsageError& e) {
+    std::cerr << tool << ": " << e.what() << "\n(" << tool << " --help lists the options)\n";
+    return 2;
+  } catch (const ConfigError& e) {
+    std::cerr << tool << ": " << e.what() << '\n';
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << tool << ": " << e.what() << '\n';
+    return 1;
+  }
 }
 
 }  // namespace bench

@@ -351,12 +351,6 @@ pbd_cloth::Metrics computeMetrics(const pbd_cloth::SceneConfig& scene,
   return metrics;
 }
 
-void writeCsvRow(std::ofstream& csv, double t, const pbd_cloth::Metrics& m) {
-  if (!csv.is_open()) return;
-  csv << t << ',' << m.max_strain << ',' << m.mean_strain << ',' << m.energy << ','
-      << m.max_penetration << '\n';
-}
-
 void warnAboutUnsupported(const pbd_cloth::SceneConfig& scene) {
   if (scene.granular.count > 0) {
     std::cerr << "bullet_cloth_bench: warning: granular particles are not simulated\n";
@@ -376,22 +370,14 @@ void warnAboutUnsupported(const pbd_cloth::SceneConfig& scene) {
 }
 
 int run(const Options& options) {
-  YAML::Node root = pbd_cloth::loadSceneYaml(options.config);
-  for (const std::string& assignment : options.overrides) {
-    pbd_cloth::applyOverride(root, assignment);
-  }
-  pbd_cloth::SceneConfig scene =
-      pbd_cloth::sceneFromYaml(root, pbd_cloth::sceneFileDirectory(options.config));
-  for (const std::string& warning : scene.load_warnings) {
-    std::fprintf(stderr, "warning: %s\n", warning.c_str());
-  }
+  pbd_cloth::SceneConfig scene = pbd_cloth::bench::loadScene(options);
   scene.granular.count = 0;  // the cloth only: Bullet's node i is pbd_cloth's particle i
   if (!options.quiet) warnAboutUnsupported(scene);
 
   std::ofstream csv = pbd_cloth::bench::openOutput("--csv", options.csv);
   std::ofstream positions = pbd_cloth::bench::openOutput("--positions", options.positions);
   std::ofstream mesh = pbd_cloth::bench::openOutput("--mesh", options.mesh);
-  if (csv.is_open()) csv << "t,max_strain,mean_strain,energy,max_penetration\n";
+  pbd_cloth::bench::writeCsvHeader(csv);
 
   pbd_cloth::Particles particles;
   pbd_cloth::ClothTopology topology;
@@ -425,7 +411,7 @@ int run(const Options& options) {
   double max_strain = last.max_strain;
   double max_penetration = last.max_penetration;
   int max_self_intersections = last.self_intersections;
-  writeCsvRow(csv, 0.0, last);
+  pbd_cloth::bench::writeCsvRow(csv, 0.0, last);
 
   using Clock = std::chrono::steady_clock;
   double step_seconds = 0.0;
@@ -444,7 +430,7 @@ int run(const Options& options) {
     max_strain = std::max(max_strain, last.max_strain);
     max_penetration = std::max(max_penetration, last.max_penetration);
     max_self_intersections = std::max(max_self_intersections, last.self_intersections);
-    writeCsvRow(csv, done * dt, last);
+    pbd_cloth::bench::writeCsvRow(csv, done * dt, last);
     if (!last.finite) break;
   }
   cloth.read(particles);
@@ -492,17 +478,6 @@ int run(const Options& options) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    return run(parseArguments(argc, argv));
-  } catch (const UsageError& e) {
-    std::cerr << "bullet_cloth_bench: " << e.what()
-              << "\n(bullet_cloth_bench --help lists the options)\n";
-    return 2;
-  } catch (const pbd_cloth::ConfigError& e) {
-    std::cerr << "bullet_cloth_bench: " << e.what() << '\n';
-    return 2;
-  } catch (const std::exception& e) {
-    std::cerr << "bullet_cloth_bench: " << e.what() << '\n';
-    return 1;
-  }
+  return pbd_cloth::bench::runTool("bullet_cloth_bench",
+                                   [&] { return run(parseArguments(argc, argv)); });
 }

@@ -154,12 +154,6 @@ void writeMesh(std::ofstream& out, const pbd_cloth::Simulation& sim) {
   }
 }
 
-void writeCsvRow(std::ofstream& csv, double t, const pbd_cloth::Metrics& m) {
-  if (!csv.is_open()) return;
-  csv << t << ',' << m.max_strain << ',' << m.mean_strain << ',' << m.energy << ','
-      << m.max_penetration << '\n';
-}
-
 // What one run measured.
 struct BenchResult {
   long long steps = 0;
@@ -274,7 +268,7 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
   result.max_strain = last.max_strain;
   result.max_penetration = last.max_penetration;
   result.max_self_intersections = last.self_intersections;
-  writeCsvRow(csv, sim.time(), last);
+  pbd_cloth::bench::writeCsvRow(csv, sim.time(), last);
 
   double step_seconds = 0.0;
   std::clock_t step_cpu = 0;
@@ -323,7 +317,7 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
     result.max_penetration = std::max(result.max_penetration, last.max_penetration);
     result.max_self_intersections =
         std::max(result.max_self_intersections, last.self_intersections);
-    writeCsvRow(csv, sim.time(), last);
+    pbd_cloth::bench::writeCsvRow(csv, sim.time(), last);
     // A diverged state stays diverged; stepping NaNs further only costs time.
     if (!last.finite) break;
   }
@@ -468,15 +462,7 @@ int searchCheapest(const pbd_cloth::SceneConfig& base, const Options& options) {
 }
 
 int run(const Options& options) {
-  YAML::Node root = pbd_cloth::loadSceneYaml(options.config);
-  for (const std::string& assignment : options.overrides) {
-    pbd_cloth::applyOverride(root, assignment);
-  }
-  const pbd_cloth::SceneConfig scene =
-      pbd_cloth::sceneFromYaml(root, pbd_cloth::sceneFileDirectory(options.config));
-  for (const std::string& warning : scene.load_warnings) {
-    std::fprintf(stderr, "warning: %s\n", warning.c_str());
-  }
+  const pbd_cloth::SceneConfig scene = pbd_cloth::bench::loadScene(options);
   if (options.target_max_strain > 0.0 || options.target_mean_strain > 0.0) {
     return searchCheapest(scene, options);
   }
@@ -487,7 +473,7 @@ int run(const Options& options) {
   // Written after the run; opened now only so a bad path fails before it.
   std::ofstream state_file = pbd_cloth::bench::openOutput("--save-state", options.save_state);
   state_file.close();
-  if (csv.is_open()) csv << "t,max_strain,mean_strain,energy,max_penetration\n";
+  pbd_cloth::bench::writeCsvHeader(csv);
 
   const BenchResult result = simulate(scene, options, csv, positions, mesh);
   pbd_cloth::bench::finishOutput(csv, options.csv);
@@ -500,16 +486,5 @@ int run(const Options& options) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    return run(parseArguments(argc, argv));
-  } catch (const UsageError& e) {
-    std::cerr << "cloth_bench: " << e.what() << "\n(cloth_bench --help lists the options)\n";
-    return 2;
-  } catch (const pbd_cloth::ConfigError& e) {
-    std::cerr << "cloth_bench: " << e.what() << '\n';
-    return 2;
-  } catch (const std::exception& e) {
-    std::cerr << "cloth_bench: " << e.what() << '\n';
-    return 1;
-  }
+  return pbd_cloth::bench::runTool("cloth_bench", [&] { return run(parseArguments(argc, argv)); });
 }
