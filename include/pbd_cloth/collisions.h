@@ -194,9 +194,15 @@ class Collisions {
   void preStabilizeObstacles(Particles& particles, double max_shift);
   // first_pass: the substep's first pass, in which no contact has pushed yet.
   double projectObstaclesAndBounds(Particles& particles, bool first_pass);
-  // The obstacles' contacts of free particle i (first_pass: the substep's first pass), and the
-  // bounds' clamp of a free particle's position.
-  double projectObstaclesOn(Particles& particles, int i, bool first_pass);
+  // The enabled obstacles whose bounds the paths of this substep of the free particles [begin,
+  // end) may reach, in increasing order, into `near`; returns how many.
+  int obstaclesNearBlock(const Particles& particles, int begin, int end, int* near) const;
+  // The obstacles' contacts of free particle i (first_pass: the substep's first pass): those of
+  // `near` (near_count of them, increasing), and after the first contact that moves the particle
+  // every later obstacle, since its path may then reach bounds its block's paths kept out of.
+  double projectObstaclesOn(Particles& particles, int i, bool first_pass, const int* near,
+                            int near_count);
+  // The bounds' clamp of a free particle's position.
   double projectBoundsOn(Vec3& x) const;
   bool particleContactsActive(const Particles& particles) const;
   bool selfCollisionActive(const ClothTopology& topology) const;
@@ -261,8 +267,13 @@ class Collisions {
   ParticleContacts particle_contacts_;
   SelfCollision self_collision_pairs_;
   WorkerPool* pool_ = nullptr;
-  // Largest change of each thread's range (solver.threads is at most 64: scene_config.cpp).
-  double thread_max_change_[64] = {};
+  // solver.threads is at most 64 (scene_config.cpp).
+  static constexpr int kMaxThreads = 64;
+  // Largest change of each thread's range.
+  double thread_max_change_[kMaxThreads] = {};
+  // obstaclesNearBlock's lists, one of obstacles_.size() entries for each thread.
+  std::vector<int> near_obstacles_;
+  std::vector<int> every_obstacle_;  // 0, 1, ...: the list of a pass after the first
   CollisionStats stats_;
   Vec3Array kinematic_reaction_;
 };

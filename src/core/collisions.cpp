@@ -26,6 +26,11 @@ constexpr double kBoxSlack = 0.5;
 // (doc/performance.md, "Search windows").
 constexpr double kWindowHalves = 0.1;
 constexpr double kWindowDoubles = 0.025;
+// The obstacles' first pass culls particles in blocks of this many consecutive indices (part of a
+// grid's row) before it culls them one by one: an obstacle that a block's paths keep out of costs
+// the block one box test instead of one per particle and obstacle, which was most of the contact
+// time of a cloth beside a robot's links (doc/performance.md, "Obstacles culled in blocks").
+constexpr int kCullBlock = 32;
 // A local search (Collisions::searchNear) for at most this many leavers per 1024 particles.
 constexpr int kMaxLocalLeavers = 64;
 int mostLocalLeavers(int particles) { return kMaxLocalLeavers * particles / 1024; }
@@ -137,6 +142,9 @@ void Collisions::prepare(const Particles& particles, const ClothTopology& topolo
   mesh_hint_.assign(obstacle_contacts_.size(), -1);
   mesh_distance_.assign(obstacle_contacts_.size(), -std::numeric_limits<double>::infinity());
   mesh_point_.assign(obstacle_contacts_.size(), Vec3::Zero());
+  near_obstacles_.assign(static_cast<std::size_t>(kMaxThreads) * obstacles_.size(), 0);
+  every_obstacle_.resize(obstacles_.size());
+  for (std::size_t k = 0; k < obstacles_.size(); ++k) every_obstacle_[k] = static_cast<int>(k);
   box_lo_.assign(n, Vec3::Zero());
   box_hi_.assign(n, Vec3::Zero());
   kinematic_reaction_.assign(n, Vec3::Zero());
@@ -423,32 +431,83 @@ double Collisions::projectObstaclesAndBounds(Particles& p, bool first_pass) {
   if (shapes_.empty() && !bounds_.enabled) return 0.0;
   const int threads =
       pool_ != nullptr && p.size() >= 2 * kParticlesPerThread ? pool_->threads() : 1;
-  auto range = [&](int begin, int end) {
+  const int count = static_cast<int>(shapes_.size());
+  // A single obstacle's own cull costs a particle what its share of a block's box would.
+  const bool by_blocks = first_pass && count > 1;
+  auto range = [&](int begin, int end, int t) {
+    int* near = near_obstacles_.data() + static_cast<std::size_t>(t) * count;
     double max_change = 0.0;
-    for (int i = begin; i < end; ++i) {
-      if (p.inverse_mass[i] == 0.0) continue;  // kinematic: prescribed, left alone
-      max_change = std::max(max_change, projectObstaclesOn(p, i, first_pass));
-      max_change = std::max(max_change, projectBoundsOn(p.position[i]));
+    for (int block = begin; block < end; block += kCullBlock) {
+      const int block_end = std::min(end, block + kCullBlock);
+      // After the first pass a particle pushed earlier in the substep has a contact to keep
+      // whatever its path: every obstacle, each culled with its contact state.
+      const int near_count = by_blocks ? obstaclesNearBlock(p, block, block_end, near) : count;
+      const int* listed = by_blocks ? near : every_obstacle_.data();
+      for (int i = block; i < block_end; ++i) {
+        if (p.inverse_mass[i] == 0.0) continue;  // kinematic: prescribed, left alone
+        max_change = std::max(max_change, projectObstaclesOn(p, i, first_pass, listed, near_count));
+        max_change = std::max(max_change, projectBoundsOn(p.position[i]));
+      }
     }
     return max_change;
   };
-  if (threads == 1) return range(0, p.size());
+  if (threads == 1) return range(0, p.size(), 0);
   double* max_change = thread_max_change_;
-  pool_->runRanges(p.size(), [&](int begin, int end, int t) { max_change[t] = range(begin, end); });
+  pool_->runRanges(p.size(),
+                   [&](int begin, int end, int t) { max_change[t] = range(begin, end, t); });
   return *std::max_element(max_change, max_change + threads);
+}
+
+// The block's box holds each free particle's box of projectObstaclesOn's cull (the same
+// arithmetic, so the same bounds to the last bit): an obstacle apart from it is apart from each.
+// A particle whose box is not one (a coordinate not a number) lists every enabled obstacle, so
+// that each is culled as before, particle by particle.
+int Collisions::obstaclesNearBlock(const Particles& p, int begin, int end, int* near) const {
+  const double inf = std::numeric_limits<double>::infinity();
+  Eigen::Array3d lo = Eigen::Array3d::Constant(inf), hi = Eigen::Array3d::Constant(-inf);
+  bool every = false;
+  for (int i = begin; i < end; ++i) {
+    if (p.inverse_mass[i] == 0.0) continue;
+    const Vec3& x = p.position[i];
+    const Vec3& start = p.substep_start[i];
+    const double r = p.radius[i];
+    const Eigen::Array3d particle_lo = x.cwiseMin(start).array() - r;
+    const Eigen::Array3d particle_hi = x.cwiseMax(start).array() + r;
+    every = every || !(particle_lo <= particle_hi).all();
+    lo = lo.min(particle_lo);
+    hi = hi.max(particle_hi);
+  }
+  int near_count = 0;
+  const int count = static_cast<int>(shapes_.size());
+  for (int k = 0; k < count; ++k) {
+    if (enabled_[k] && (every || !boxesApart(lo, hi, obstacle_lo_[k], obstacle_hi_[k]))) {
+      near[near_count++] = k;
+    }
+  }
+  return near_count;
 }
 
 // Particle-environment contact (seed eq. plane_constraint, extended to any shape through its
 // signed distance): C = distance(x) - r >= 0, the full correction to the particle since the shape
 // is immovable, along the surface normal. Swept in the shape's frame for no tunnelling (see
 // collisions.h), followed by friction relative to the shape's own motion over the substep.
-double Collisions::projectObstaclesOn(Particles& p, int i, bool first_pass) {
+double Collisions::projectObstaclesOn(Particles& p, int i, bool first_pass, const int* near,
+                                      int near_count) {
   const std::size_t count = shapes_.size();
   double max_change = 0.0;
   Vec3& x = p.position[i];
   const Vec3& start = p.substep_start[i];
   const double r = p.radius[i];
-  for (std::size_t k = 0; k < count; ++k) {
+  // The obstacles of `near` in order until a contact moves the particle: its path may then reach
+  // bounds that its block's paths kept out of, so from there on every later obstacle.
+  int q = 0;
+  bool every_later = false;
+  auto next = [&](std::size_t k) {
+    if (every_later) return k + 1;
+    return ++q < near_count ? static_cast<std::size_t>(near[q]) : count;
+  };
+  for (std::size_t k = near_count > 0 ? static_cast<std::size_t>(near[0]) : count; k < count;
+       k = next(k)) {
     if (!enabled_[k]) continue;
     const std::size_t slot = static_cast<std::size_t>(i) * count + k;
     // Cheap cull: a particle whose path of this substep (the segment from its start, in the box
@@ -508,6 +567,7 @@ double Collisions::projectObstaclesOn(Particles& p, int i, bool first_pass) {
       const Vec3 n = end.rotation * normal;
       const double push = contactIncrement(c, state);
       x += push * n;
+      every_later = true;
       state.normal = n;
       max_change = std::max(max_change, std::abs(push));
     }
@@ -515,6 +575,7 @@ double Collisions::projectObstaclesOn(Particles& p, int i, bool first_pass) {
       // The shape carries the point under the particle along with it: the relative
       // displacement is measured from there, so a moving shape drags what rests on it.
       x += frictionCorrection(x - end.toWorld(state.base), state, obstacle_friction_[k]);
+      every_later = true;
     }
   }
   return max_change;

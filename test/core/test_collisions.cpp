@@ -262,6 +262,27 @@ TEST(CollisionMovingObstacle, SphereSweepsThroughCurtainAndNoParticleEndsInside)
   }
 }
 
+// The obstacles' first pass culls particles in blocks by the paths they had before it
+// (collisions.cpp, kCullBlock). A particle that one obstacle pushes off its path must still meet
+// the obstacles after it: a ball sweeping 0.15 m in one substep into a resting particle pushes it
+// 6 cm, into a wall its own (still) path was 3 cm from, and the wall, listed after the ball,
+// takes it out to its face (the ball then overlaps it: squeezed, the last contact wins).
+TEST(CollisionCulling, AParticlePushedIntoALaterObstacleMeetsIt) {
+  const double r = 0.01;
+  SceneConfig scene = test::pointParticleScene(r, Vec3::Zero());
+  scene.solver.gravity.setZero();
+  scene.solver.substeps = 1;
+  scene.cloth.friction = FrictionConfig{0.0, 0.0};
+  scene.obstacles = {test::sphere("ball", 0.1, test::makePose(Vec3(0.2, 0.0, 0.0))),
+                     test::box("wall", Vec3(0.26, 1.0, 1.0),
+                               test::makePose(Vec3(-0.17, 0.0, 0.0)))};  // x <= -0.04
+  Simulation sim(scene);
+  sim.setObstaclePose(0, test::makePose(Vec3(0.05, 0.0, 0.0)));
+  sim.step();
+  EXPECT_NEAR(sim.particles().position[kPoint].x(), -0.04 + r, 1e-12)
+      << "-0.06 would be the ball's push alone, inside the wall";
+}
+
 // The shipped drape scene (config/drape.yaml): a cloth dropped onto a ball on a table. Contact
 // penetration below 10 % of the thickness at every step, no self-intersection, finite.
 TEST(CollisionDrape, ShippedDrapeSceneStaysOutsideBallAndTable) {
