@@ -28,8 +28,8 @@ constexpr double kWindowHalves = 0.1;
 constexpr double kWindowDoubles = 0.025;
 // The obstacles' first pass culls particles in blocks of this many consecutive indices (part of a
 // grid's row) before it culls them one by one: an obstacle that a block's paths keep out of costs
-// the block one box test instead of one per particle and obstacle, which was most of the contact
-// time of a cloth beside a robot's links (doc/performance.md, "Obstacles culled in blocks").
+// the block one box test instead of one per particle (a robot's links, far from most of the
+// cloth: doc/performance.md, "Obstacles culled in blocks").
 constexpr int kCullBlock = 32;
 // A local search (Collisions::searchNear) for at most this many leavers per 1024 particles.
 constexpr int kMaxLocalLeavers = 64;
