@@ -199,7 +199,8 @@ class Collisions {
   int obstaclesNearBlock(const Particles& particles, int begin, int end, int* near) const;
   // The obstacles' contacts of free particle i (first_pass: the substep's first pass): those of
   // `near` (near_count of them, increasing), and after the first contact that moves the particle
-  // every later obstacle, since its path may then reach bounds its block's paths kept out of.
+  // every later obstacle, since its path may then reach bounds its block's paths kept out of;
+  // every obstacle when `near` is nullptr.
   double projectObstaclesOn(Particles& particles, int i, bool first_pass, const int* near,
                             int near_count);
   // The bounds' clamp of a free particle's position.
@@ -273,7 +274,6 @@ class Collisions {
   double thread_max_change_[kMaxThreads] = {};
   // obstaclesNearBlock's lists, one of obstacles_.size() entries for each thread.
   std::vector<int> near_obstacles_;
-  std::vector<int> every_obstacle_;  // 0, 1, ...: the list of a pass after the first
   CollisionStats stats_;
   Vec3Array kinematic_reaction_;
 };

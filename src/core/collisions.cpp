@@ -41,6 +41,14 @@ bool outsideBounds(const Vec3& x, double r, const Vec3& lo, const Vec3& hi) {
   return (x.array() + r < lo.array()).any() || (x.array() - r > hi.array()).any();
 }
 
+// The box of a particle's path over the substep, from `start` to x, grown by its radius r: what
+// the obstacles' cull tests, for one particle and for a block of them alike (the same arithmetic,
+// so a block's box holds each of its particles' boxes to the last bit).
+void pathBox(const Vec3& x, const Vec3& start, double r, Eigen::Array3d& lo, Eigen::Array3d& hi) {
+  lo = x.cwiseMin(start).array() - r;
+  hi = x.cwiseMax(start).array() + r;
+}
+
 // True when the boxes [a_lo, a_hi] and [b_lo, b_hi] share no point.
 bool boxesApart(const Eigen::Array3d& a_lo, const Eigen::Array3d& a_hi, const Vec3& b_lo,
                 const Vec3& b_hi) {
@@ -143,8 +151,6 @@ void Collisions::prepare(const Particles& particles, const ClothTopology& topolo
   mesh_distance_.assign(obstacle_contacts_.size(), -std::numeric_limits<double>::infinity());
   mesh_point_.assign(obstacle_contacts_.size(), Vec3::Zero());
   near_obstacles_.assign(static_cast<std::size_t>(kMaxThreads) * obstacles_.size(), 0);
-  every_obstacle_.resize(obstacles_.size());
-  for (std::size_t k = 0; k < obstacles_.size(); ++k) every_obstacle_[k] = static_cast<int>(k);
   box_lo_.assign(n, Vec3::Zero());
   box_hi_.assign(n, Vec3::Zero());
   kinematic_reaction_.assign(n, Vec3::Zero());
@@ -439,10 +445,10 @@ double Collisions::projectObstaclesAndBounds(Particles& p, bool first_pass) {
     double max_change = 0.0;
     for (int block = begin; block < end; block += kCullBlock) {
       const int block_end = std::min(end, block + kCullBlock);
-      // After the first pass a particle pushed earlier in the substep has a contact to keep
-      // whatever its path: every obstacle, each culled with its contact state.
+      // Otherwise every obstacle (nullptr), each culled for the particle alone: after the first
+      // pass a particle pushed earlier in the substep has a contact to keep whatever its path.
       const int near_count = by_blocks ? obstaclesNearBlock(p, block, block_end, near) : count;
-      const int* listed = by_blocks ? near : every_obstacle_.data();
+      const int* listed = by_blocks ? near : nullptr;
       for (int i = block; i < block_end; ++i) {
         if (p.inverse_mass[i] == 0.0) continue;  // kinematic: prescribed, left alone
         max_change = std::max(max_change, projectObstaclesOn(p, i, first_pass, listed, near_count));
@@ -458,8 +464,8 @@ double Collisions::projectObstaclesAndBounds(Particles& p, bool first_pass) {
   return *std::max_element(max_change, max_change + threads);
 }
 
-// The block's box holds each free particle's box of projectObstaclesOn's cull (the same
-// arithmetic, so the same bounds to the last bit): an obstacle apart from it is apart from each.
+// The block's box holds each free particle's path box (pathBox): an obstacle apart from it is
+// apart from each.
 // A particle whose box is not one (a coordinate not a number) lists every enabled obstacle, so
 // that each is culled as before, particle by particle.
 int Collisions::obstaclesNearBlock(const Particles& p, int begin, int end, int* near) const {
@@ -468,11 +474,8 @@ int Collisions::obstaclesNearBlock(const Particles& p, int begin, int end, int* 
   bool every = false;
   for (int i = begin; i < end; ++i) {
     if (p.inverse_mass[i] == 0.0) continue;
-    const Vec3& x = p.position[i];
-    const Vec3& start = p.substep_start[i];
-    const double r = p.radius[i];
-    const Eigen::Array3d particle_lo = x.cwiseMin(start).array() - r;
-    const Eigen::Array3d particle_hi = x.cwiseMax(start).array() + r;
+    Eigen::Array3d particle_lo, particle_hi;
+    pathBox(p.position[i], p.substep_start[i], p.radius[i], particle_lo, particle_hi);
     every = every || !(particle_lo <= particle_hi).all();
     lo = lo.min(particle_lo);
     hi = hi.max(particle_hi);
@@ -501,20 +504,23 @@ double Collisions::projectObstaclesOn(Particles& p, int i, bool first_pass, cons
   // The obstacles of `near` in order until a contact moves the particle: its path may then reach
   // bounds that its block's paths kept out of, so from there on every later obstacle.
   int q = 0;
-  bool every_later = false;
+  bool every_later = near == nullptr;
   auto next = [&](std::size_t k) {
     if (every_later) return k + 1;
     return ++q < near_count ? static_cast<std::size_t>(near[q]) : count;
   };
-  for (std::size_t k = near_count > 0 ? static_cast<std::size_t>(near[0]) : count; k < count;
-       k = next(k)) {
+  const std::size_t first = every_later      ? 0
+                            : near_count > 0 ? static_cast<std::size_t>(near[0])
+                                             : count;
+  for (std::size_t k = first; k < count; k = next(k)) {
     if (!enabled_[k]) continue;
     const std::size_t slot = static_cast<std::size_t>(i) * count + k;
     // Cheap cull: a particle whose path of this substep (the segment from its start, in the box
     // of its ends grown by its radius) stays out of the obstacle's bounds cannot touch it, unless
     // it was pushed out earlier in this substep (never so in its first pass).
-    const bool apart = boxesApart(x.cwiseMin(start).array() - r, x.cwiseMax(start).array() + r,
-                                  obstacle_lo_[k], obstacle_hi_[k]);
+    Eigen::Array3d path_lo, path_hi;
+    pathBox(x, start, r, path_lo, path_hi);
+    const bool apart = boxesApart(path_lo, path_hi, obstacle_lo_[k], obstacle_hi_[k]);
     if (apart && first_pass) continue;  // (the contact's state not even read)
     ContactState& state = obstacle_contacts_[slot];
     const bool pushed = state.substep == substep_ && state.depth > 0.0;
