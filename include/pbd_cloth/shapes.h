@@ -50,7 +50,9 @@ Frame frameFromPose(const Pose& pose);
 // Pose at fraction s of the motion a -> b: linear position, slerp orientation.
 Frame interpolateFrame(const Pose& a, const Pose& b, double s);
 
-// World-space bounding box of the shape placed at `frame` (infinite for a plane).
+// World-space bounding box of the shape placed at `frame`. A plane's solid is a half-space:
+// infinite, except on the axis its normal lies along when the normal lies exactly along one
+// (a floor, a wall), where it ends at the plane.
 void worldBounds(const Shape& shape, const Frame& frame, Vec3& lo, Vec3& hi);
 
 // Signed distance of the local point x to the surface (negative inside) and the outward unit

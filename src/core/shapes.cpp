@@ -48,10 +48,29 @@ Frame interpolateFrame(const Pose& a, const Pose& b, double s) {
 void worldBounds(const Shape& shape, const Frame& frame, Vec3& lo, Vec3& hi) {
   Vec3 extent = Vec3::Zero();
   switch (shape.type) {
-    case ShapeType::kPlane:
-      lo = Vec3::Constant(-std::numeric_limits<double>::infinity());
-      hi = Vec3::Constant(std::numeric_limits<double>::infinity());
+    case ShapeType::kPlane: {
+      const double inf = std::numeric_limits<double>::infinity();
+      lo = Vec3::Constant(-inf);
+      hi = Vec3::Constant(inf);
+      // The solid is n . x <= level in world coordinates (signedDistance: n_local . x_local <=
+      // offset, x_local = R^T (x - t)). With n along axis a alone it is x_a <= level / n_a (or >=
+      // for n_a < 0): a floor bounds z from above, so the obstacles' cull skips it for a cloth
+      // far above it. Any other normal leaves the half-space unbounded on every axis.
+      const Vec3 n = frame.rotation * shape.normal;
+      const double level = shape.offset + n.dot(frame.translation);
+      for (int a = 0; a < 3; ++a) {
+        if (n[(a + 1) % 3] != 0.0 || n[(a + 2) % 3] != 0.0 || n[a] == 0.0) continue;
+        // Grown by a relative 1e-12 and the padding, so rounding never cuts off a contact.
+        const double end = level / n[a];
+        const double margin = 1e-12 * (1.0 + std::abs(end)) + std::abs(shape.padding);
+        if (n[a] > 0.0) {
+          hi[a] = end + margin;
+        } else {
+          lo[a] = end - margin;
+        }
+      }
       return;
+    }
     case ShapeType::kSphere:
       extent = Vec3::Constant(shape.radius);
       break;

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <random>
 #include <set>
 #include <string>
@@ -105,6 +106,57 @@ TEST(CollisionShapes, WorldBoundsHoldTheShape) {
                   (surface.array() <= hi.array() + 1e-12).all())
           << config.name;
     }
+  }
+}
+
+// A plane's solid is bounded on the axis its normal lies along (a floor: from above), so the
+// obstacles' cull can skip it; every point of the solid stays inside the bounds, and a tilted
+// plane is unbounded on every axis.
+TEST(CollisionShapes, WorldBoundsOfAPlaneEndAtItOnItsNormalsAxis) {
+  std::mt19937 random(7);
+  std::uniform_real_distribution<double> unit(-2.0, 2.0);
+  struct Case {
+    Vec3 normal;
+    double offset;
+    Pose pose;
+    int axis;  // the bounded axis, -1 for none
+    double end;
+  };
+  const Eigen::Quaterniond tilt(Eigen::AngleAxisd(0.3, Vec3::UnitX()));
+  const Case cases[] = {
+      {Vec3(0.0, 0.0, 2.0), 0.4, test::makePose(Vec3(5.0, -1.0, 0.1)), 2, 0.3},  // z <= 0.2 + 0.1
+      {Vec3(0.0, -1.0, 0.0), 0.5, test::makePose(Vec3(0.0, 0.25, 0.0)), 1,
+       -0.25},  // y >= -0.5 + 0.25
+      {Vec3(0.0, 0.0, 1.0), 0.0, test::makePose(Vec3::Zero(), tilt), -1, 0.0}};
+  for (const Case& c : cases) {
+    const ObstacleConfig config = test::plane("p", c.normal, c.offset);
+    ObstacleConfig placed = config;
+    placed.pose = c.pose;
+    const Shape shape = shapeOf(placed);
+    const Frame frame = frameFromPose(c.pose);
+    Vec3 lo, hi;
+    worldBounds(shape, frame, lo, hi);
+    for (int a = 0; a < 3; ++a) {
+      if (a != c.axis) {
+        EXPECT_EQ(lo[a], -std::numeric_limits<double>::infinity()) << "axis " << a;
+        EXPECT_EQ(hi[a], std::numeric_limits<double>::infinity()) << "axis " << a;
+      } else if (c.normal[a] > 0.0) {
+        EXPECT_NEAR(hi[a], c.end, 1e-9);
+        EXPECT_EQ(lo[a], -std::numeric_limits<double>::infinity());
+      } else {
+        EXPECT_NEAR(lo[a], c.end, 1e-9);
+        EXPECT_EQ(hi[a], std::numeric_limits<double>::infinity());
+      }
+    }
+    int inside = 0;
+    for (int k = 0; k < 2000; ++k) {
+      const Vec3 x(unit(random), unit(random), unit(random));
+      if (signedDistance(shape, frame.toLocal(x)) > 0.0) continue;
+      ++inside;
+      EXPECT_TRUE((x.array() >= lo.array()).all() && (x.array() <= hi.array()).all())
+          << x.transpose();
+    }
+    EXPECT_GT(inside, 200);  // the test sampled the solid
   }
 }
 
