@@ -126,6 +126,24 @@ TEST(Sleeping, ACollidingBallWakesItAFarOneDoesNot) {
   EXPECT_NE(sim.particles().position, rest);
 }
 
+// A floor is a plane, and its bounds end at it (worldBounds): moved far below the towel it leaves
+// the towel asleep; rising into the towel it wakes it and lifts it.
+TEST(Sleeping, AFloorMovingFarBelowLeavesItAsleepOneRisingIntoItWakesIt) {
+  SceneConfig scene = towelScene();
+  scene.obstacles.push_back(test::plane("floor", Vec3::UnitZ(), 0.0));
+  Simulation sim(scene);
+  stepUntilAsleep(sim);
+  sim.setObstaclePose(2, test::makePose(Vec3(0.0, 0.0, 0.3)));  // still 0.5 m below
+  sim.step();
+  EXPECT_TRUE(sim.asleep());
+  for (double z : {0.6, 0.79, 0.82, 0.85}) {
+    sim.setObstaclePose(2, test::makePose(Vec3(0.0, 0.0, z)));
+    sim.step();
+  }
+  EXPECT_FALSE(sim.asleep());
+  for (const Vec3& x : sim.particles().position) EXPECT_GE(x.z(), 0.85 + 0.005 - 1e-6);
+}
+
 // Parameters from outside wake it: gravity turned sideways makes it slide.
 TEST(Sleeping, ChangedSolverParametersWakeIt) {
   Simulation sim(towelScene());
