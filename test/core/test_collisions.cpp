@@ -123,14 +123,13 @@ TEST(CollisionShapes, WorldBoundsOfAPlaneEndAtItOnItsNormalsAxis) {
     double end;
   };
   const Eigen::Quaterniond tilt(Eigen::AngleAxisd(0.3, Vec3::UnitX()));
-  const Case cases[] = {
-      {Vec3(0.0, 0.0, 2.0), 0.4, test::makePose(Vec3(5.0, -1.0, 0.1)), 2, 0.3},  // z <= 0.2 + 0.1
-      {Vec3(0.0, -1.0, 0.0), 0.5, test::makePose(Vec3(0.0, 0.25, 0.0)), 1,
-       -0.25},  // y >= -0.5 + 0.25
-      {Vec3(0.0, 0.0, 1.0), 0.0, test::makePose(Vec3::Zero(), tilt), -1, 0.0}};
+  const Case cases[] = {// z <= 0.4 / 2 + 0.1
+                        {Vec3(0.0, 0.0, 2.0), 0.4, test::makePose(Vec3(5.0, -1.0, 0.1)), 2, 0.3},
+                        // -y <= 0.5 - 0.25, so y >= -0.25
+                        {Vec3(0.0, -1.0, 0.0), 0.5, test::makePose(Vec3(0.0, 0.25, 0.0)), 1, -0.25},
+                        {Vec3(0.0, 0.0, 1.0), 0.0, test::makePose(Vec3::Zero(), tilt), -1, 0.0}};
   for (const Case& c : cases) {
-    const ObstacleConfig config = test::plane("p", c.normal, c.offset);
-    ObstacleConfig placed = config;
+    ObstacleConfig placed = test::plane("p", c.normal, c.offset);
     placed.pose = c.pose;
     const Shape shape = shapeOf(placed);
     const Frame frame = frameFromPose(c.pose);
