@@ -194,13 +194,16 @@ class Collisions {
   void preStabilizeObstacles(Particles& particles, double max_shift);
   // first_pass: the substep's first pass, in which no contact has pushed yet.
   double projectObstaclesAndBounds(Particles& particles, bool first_pass);
-  // The enabled obstacles whose bounds the paths of this substep of the free particles [begin,
-  // end) may reach, in increasing order, into `near`; returns how many.
-  int obstaclesNearBlock(const Particles& particles, int begin, int end, int* near) const;
+  // The substep's first pass of obstacles and bounds over the free particles [begin, end), at
+  // most kCullBlock of them, culled by their paths' boxes (`near`: room for the obstacles'
+  // list); returns the largest correction.
+  double projectBlockFirstPass(Particles& particles, int begin, int end, int* near);
   // The obstacles' contacts of free particle i (first_pass: the substep's first pass): those of
   // `near` (near_count of them, increasing), and after the first contact that moves the particle
   // every later obstacle, since its path may then reach bounds its block's paths kept out of;
-  // every obstacle when `near` is nullptr.
+  // every obstacle when `near` is nullptr. kFirstReaches: the caller found the particle's path
+  // box reaching the first listed obstacle's bounds (the test is not repeated).
+  template <bool kFirstReaches>
   double projectObstaclesOn(Particles& particles, int i, bool first_pass, const int* near,
                             int near_count);
   // The bounds' clamp of a free particle's position.
@@ -272,7 +275,7 @@ class Collisions {
   static constexpr int kMaxThreads = 64;
   // Largest change of each thread's range.
   double thread_max_change_[kMaxThreads] = {};
-  // obstaclesNearBlock's lists, one of obstacles_.size() entries for each thread.
+  // projectBlockFirstPass's lists, one of obstacles_.size() entries for each thread.
   std::vector<int> near_obstacles_;
   CollisionStats stats_;
   Vec3Array kinematic_reaction_;

@@ -438,20 +438,24 @@ double Collisions::projectObstaclesAndBounds(Particles& p, bool first_pass) {
   const int threads =
       pool_ != nullptr && p.size() >= 2 * kParticlesPerThread ? pool_->threads() : 1;
   const int count = static_cast<int>(shapes_.size());
-  // A single obstacle's own cull costs a particle what its share of a block's box would.
+  // A single obstacle's own cull costs a particle what its share of a block's box would (and a
+  // cloth lying on its only obstacle, a towel on a table, would pay for both).
   const bool by_blocks = first_pass && count > 1;
   auto range = [&](int begin, int end, int t) {
     int* near = near_obstacles_.data() + static_cast<std::size_t>(t) * count;
     double max_change = 0.0;
     for (int block = begin; block < end; block += kCullBlock) {
       const int block_end = std::min(end, block + kCullBlock);
-      // Otherwise every obstacle (nullptr), each culled for the particle alone: after the first
-      // pass a particle pushed earlier in the substep has a contact to keep whatever its path.
-      const int near_count = by_blocks ? obstaclesNearBlock(p, block, block_end, near) : count;
-      const int* listed = by_blocks ? near : nullptr;
+      if (by_blocks) {
+        max_change = std::max(max_change, projectBlockFirstPass(p, block, block_end, near));
+        continue;
+      }
+      // Every obstacle, each culled for the particle alone (nullptr): after the first pass a
+      // particle pushed earlier in the substep has a contact to keep whatever its path.
       for (int i = block; i < block_end; ++i) {
         if (p.inverse_mass[i] == 0.0) continue;  // kinematic: prescribed, left alone
-        max_change = std::max(max_change, projectObstaclesOn(p, i, first_pass, listed, near_count));
+        max_change =
+            std::max(max_change, projectObstaclesOn<false>(p, i, first_pass, nullptr, count));
         max_change = std::max(max_change, projectBoundsOn(p.position[i]));
       }
     }
@@ -464,17 +468,26 @@ double Collisions::projectObstaclesAndBounds(Particles& p, bool first_pass) {
   return *std::max_element(max_change, max_change + threads);
 }
 
-// The block's box holds each free particle's path box (pathBox): an obstacle apart from it is
-// apart from each.
-// A particle whose box is not one (a coordinate not a number) lists every enabled obstacle, so
-// that each is culled as before, particle by particle.
-int Collisions::obstaclesNearBlock(const Particles& p, int begin, int end, int* near) const {
+// The first pass over the free particles [begin, end): each one's path box (pathBox) once, for
+// three culls in turn, each exact, so that a particle that can touch nothing costs that box and
+// a few comparisons (a cloth falling or lying clear of most obstacles: most of its particles):
+//  - the block: an obstacle apart from the box holding all of the block's boxes is apart from
+//    each (its list `near`, in increasing order);
+//  - the particle: of those, the obstacles its own box reaches; none, and projectObstaclesOn
+//    would skip each of them unread, so it is not called;
+//  - the bounds: a particle no contact moved lies inside its box, so a box inside the bounds
+//    leaves it unclamped (projectBoundsOn would change nothing).
+// A box that is not one (a coordinate not a number) lists every enabled obstacle and is never
+// inside the bounds, so that particle goes through every test as before.
+double Collisions::projectBlockFirstPass(Particles& p, int begin, int end, int* near) {
   const double inf = std::numeric_limits<double>::infinity();
+  Eigen::Array3d box[kCullBlock][2];  // each particle's path box: lo, hi
   Eigen::Array3d lo = Eigen::Array3d::Constant(inf), hi = Eigen::Array3d::Constant(-inf);
   bool every = false;
   for (int i = begin; i < end; ++i) {
     if (p.inverse_mass[i] == 0.0) continue;
-    Eigen::Array3d particle_lo, particle_hi;
+    Eigen::Array3d& particle_lo = box[i - begin][0];
+    Eigen::Array3d& particle_hi = box[i - begin][1];
     pathBox(p.position[i], p.substep_start[i], p.radius[i], particle_lo, particle_hi);
     every = every || !(particle_lo <= particle_hi).all();
     lo = lo.min(particle_lo);
@@ -487,13 +500,39 @@ int Collisions::obstaclesNearBlock(const Particles& p, int begin, int end, int* 
       near[near_count++] = k;
     }
   }
-  return near_count;
+  const bool bounds_apply = bounds_.enabled;
+  const Eigen::Array3d bounds_min = bounds_.min.array(), bounds_max = bounds_.max.array();
+  auto insideBounds = [&](const Eigen::Array3d& a, const Eigen::Array3d& b) {
+    return (a >= bounds_min).all() && (b <= bounds_max).all();
+  };
+  // The whole block clear of every obstacle and inside the bounds: nothing to do.
+  if (near_count == 0 && (!bounds_apply || insideBounds(lo, hi))) return 0.0;
+  double max_change = 0.0;
+  for (int i = begin; i < end; ++i) {
+    if (p.inverse_mass[i] == 0.0) continue;  // kinematic: prescribed, left alone
+    const Eigen::Array3d& particle_lo = box[i - begin][0];
+    const Eigen::Array3d& particle_hi = box[i - begin][1];
+    int first = 0;  // the first listed obstacle its box reaches
+    while (first < near_count && boxesApart(particle_lo, particle_hi, obstacle_lo_[near[first]],
+                                            obstacle_hi_[near[first]])) {
+      ++first;
+    }
+    if (first < near_count) {
+      max_change = std::max(max_change,
+                            projectObstaclesOn<true>(p, i, true, near + first, near_count - first));
+    } else if (bounds_apply && insideBounds(particle_lo, particle_hi)) {
+      continue;
+    }
+    if (bounds_apply) max_change = std::max(max_change, projectBoundsOn(p.position[i]));
+  }
+  return max_change;
 }
 
 // Particle-environment contact (seed eq. plane_constraint, extended to any shape through its
 // signed distance): C = distance(x) - r >= 0, the full correction to the particle since the shape
 // is immovable, along the surface normal. Swept in the shape's frame for no tunnelling (see
 // collisions.h), followed by friction relative to the shape's own motion over the substep.
+template <bool kFirstReaches>
 double Collisions::projectObstaclesOn(Particles& p, int i, bool first_pass, const int* near,
                                       int near_count) {
   const std::size_t count = shapes_.size();
@@ -518,9 +557,12 @@ double Collisions::projectObstaclesOn(Particles& p, int i, bool first_pass, cons
     // Cheap cull: a particle whose path of this substep (the segment from its start, in the box
     // of its ends grown by its radius) stays out of the obstacle's bounds cannot touch it, unless
     // it was pushed out earlier in this substep (never so in its first pass).
-    Eigen::Array3d path_lo, path_hi;
-    pathBox(x, start, r, path_lo, path_hi);
-    const bool apart = boxesApart(path_lo, path_hi, obstacle_lo_[k], obstacle_hi_[k]);
+    bool apart = false;
+    if (!(kFirstReaches && k == first)) {
+      Eigen::Array3d path_lo, path_hi;
+      pathBox(x, start, r, path_lo, path_hi);
+      apart = boxesApart(path_lo, path_hi, obstacle_lo_[k], obstacle_hi_[k]);
+    }
     if (apart && first_pass) continue;  // (the contact's state not even read)
     ContactState& state = obstacle_contacts_[slot];
     const bool pushed = state.substep == substep_ && state.depth > 0.0;

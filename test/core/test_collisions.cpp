@@ -334,6 +334,36 @@ TEST(CollisionCulling, AParticlePushedIntoALaterObstacleMeetsIt) {
       << "-0.06 would be the ball's push alone, inside the wall";
 }
 
+// The first pass leaves the bounds' clamp out for a particle whose path box lies inside the
+// bounds (collisions.cpp, projectBlockFirstPass), which holds only while no contact has moved it.
+// Pushed: the ball sweeps the resting particle 6 cm along -x, past the bounds' face at x = -0.04
+// that its own path kept 3 cm inside of, and the clamp takes it back to that face. Unpushed: a
+// particle flying out through the face is clamped to it too. A second obstacle, far away, puts
+// the pass on its blocks (a single obstacle is culled particle by particle).
+TEST(CollisionCulling, AParticleLeavingTheBoundsIsClampedWhateverMovedIt) {
+  const double r = 0.01;
+  for (const bool pushed : {true, false}) {
+    SceneConfig scene = test::pointParticleScene(r, Vec3::Zero());
+    scene.solver.gravity.setZero();
+    scene.solver.substeps = 1;
+    scene.cloth.friction = FrictionConfig{0.0, 0.0};
+    scene.bounds.enabled = true;
+    scene.bounds.min = Vec3(-0.04, -1.0, -1.0);
+    scene.bounds.max = Vec3(200.0, 200.0, 200.0);  // the pinned pair at 100 m inside too
+    scene.obstacles = {test::sphere("ball", 0.1, test::makePose(Vec3(0.2, 0.0, 0.0))),
+                       test::box("far", Vec3(0.1, 0.1, 0.1), test::makePose(Vec3(0.0, 0.0, 5.0)))};
+    Simulation sim(scene);
+    if (pushed) {
+      sim.setObstaclePose(0, test::makePose(Vec3(0.05, 0.0, 0.0)));
+    } else {
+      sim.mutableParticles().velocity[kPoint] = Vec3(-0.06 * scene.step_rate, 0.0, 0.0);
+    }
+    sim.step();
+    EXPECT_NEAR(sim.particles().position[kPoint].x(), -0.04, 1e-12)
+        << (pushed ? "pushed by the ball" : "flying out") << ": -0.06 without the clamp";
+  }
+}
+
 // The shipped drape scene (config/drape.yaml): a cloth dropped onto a ball on a table. Contact
 // penetration below 10 % of the thickness at every step, no self-intersection, finite.
 TEST(CollisionDrape, ShippedDrapeSceneStaysOutsideBallAndTable) {
