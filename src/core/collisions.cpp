@@ -505,8 +505,9 @@ double Collisions::projectBlockFirstPass(Particles& p, int begin, int end, int* 
   auto insideBounds = [&](const Eigen::Array3d& a, const Eigen::Array3d& b) {
     return (a >= bounds_min).all() && (b <= bounds_max).all();
   };
-  // The whole block clear of every obstacle and inside the bounds: nothing to do.
-  if (near_count == 0 && (!bounds_apply || insideBounds(lo, hi))) return 0.0;
+  // The whole block clear of every obstacle and inside the bounds: nothing to do. (Not with a
+  // box that is not one: the union's min and max may have dropped its NaN.)
+  if (near_count == 0 && !every && (!bounds_apply || insideBounds(lo, hi))) return 0.0;
   double max_change = 0.0;
   for (int i = begin; i < end; ++i) {
     if (p.inverse_mass[i] == 0.0) continue;  // kinematic: prescribed, left alone
