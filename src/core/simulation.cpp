@@ -115,8 +115,7 @@ void Simulation::build() {
   time_ = 0.0;
   good_position_ = particles_.position;
   last_step_restored_ = false;
-  computeStrain(particles_, topology_, solver_.mutableStats().max_strain,
-                solver_.mutableStats().mean_strain);
+  state_measured_ = false;
 }
 
 // The robot's collision elements become colliders after the obstacles, posed by forward kinematics
@@ -323,7 +322,8 @@ void Simulation::releaseGrasp(GripperState& gripper) {
 }
 
 void Simulation::kinematicSetChanged() {
-  wake();  // a grasp or a release: the cloth is held differently
+  wake();                   // a grasp or a release: the cloth is held differently
+  state_measured_ = false;  // the penetration measure leaves kinematic particles out
   if (scene_.cloth.tethers) {
     std::fill(anchor_holder_.begin(), anchor_holder_.end(), -1);
     for (std::size_t g = 0; g < grippers_.size(); ++g) {
@@ -522,10 +522,23 @@ void Simulation::stepAwake(double dt, bool targets_set) {
     const StepFault fault = findFault();
     if (fault.kind != StepFault::Kind::kNone) undoStep(fault);
   }
-  StepStats& stats = solver_.mutableStats();
-  computeStrain(particles_, topology_, stats.max_strain, stats.mean_strain);
-  stats.max_penetration = collisions_.maxPenetration(particles_, topology_);
+  state_measured_ = false;
   if (!last_step_restored_) updateSleep(dt);
+}
+
+const StepStats& Simulation::stats() const {
+  if (!state_measured_) {
+    computeStrain(particles_, topology_, reported_stats_.max_strain, reported_stats_.mean_strain);
+    reported_stats_.max_penetration = collisions_.maxPenetration(particles_, topology_);
+    state_measured_ = true;
+  }
+  const double max_strain = reported_stats_.max_strain, mean_strain = reported_stats_.mean_strain;
+  const double max_penetration = reported_stats_.max_penetration;
+  reported_stats_ = solver_.stats();
+  reported_stats_.max_strain = max_strain;
+  reported_stats_.mean_strain = mean_strain;
+  reported_stats_.max_penetration = max_penetration;
+  return reported_stats_;
 }
 
 StepFault Simulation::findFault() const {

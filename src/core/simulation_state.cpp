@@ -214,9 +214,7 @@ bool Simulation::setState(const SimulationState& state, std::string& reason) {
   collisions_.setAdaptiveSearchWindow(state.search_window);
   kinematicSetChanged();  // tethers of the restored grasps
   collisions_.findCandidatesNow(particles_, topology_);
-  StepStats& stats = solver_.mutableStats();
-  computeStrain(particles_, topology_, stats.max_strain, stats.mean_strain);
-  stats.max_penetration = collisions_.maxPenetration(particles_, topology_);
+  state_measured_ = false;
   return true;
 }
 

@@ -498,17 +498,18 @@ void ClothRos::stepOnce() {
   if (!config_.publish_clock) {
     clock_factor_.add(ros::Time::now().toSec(), sim_->time());
   }
-  diagnostics_->addStep(sim_->stats().step_wall_time,
-                        sim_->collisions().stats().truncated_searches);
+  // The solver's own figures: Simulation::stats() would measure the state at every step.
+  const StepStats& step_stats = sim_->solver().stats();
+  diagnostics_->addStep(step_stats.step_wall_time, sim_->collisions().stats().truncated_searches);
   warnAboutDegenerateConstraints();
   warnAboutTruncatedSearches();
 
-  if (sim_->stats().step_wall_time > period) {
+  if (step_stats.step_wall_time > period) {
     ROS_WARN_THROTTLE(10.0,
                       "A step takes %.1f ms, longer than its period of %.1f ms: the simulation "
                       "runs slower than real time (factor %.2f). Lower step_rate, "
                       "solver.substeps or the cloth size.",
-                      1e3 * sim_->stats().step_wall_time, 1e3 * period, real_time_factor_.value());
+                      1e3 * step_stats.step_wall_time, 1e3 * period, real_time_factor_.value());
   }
   if (publish_ticks_.due(sim_->time())) {
     publishOutputs();
@@ -545,7 +546,7 @@ void ClothRos::injectFaultCallback(const std_msgs::String& msg) {
 // Coincident particles (a cloth crushed flat by a gripper, a bad initial state) leave their stretch
 // constraint without a direction: the solver skips it, and says so here, by index.
 void ClothRos::warnAboutDegenerateConstraints() {
-  const StepStats& stats = sim_->stats();
+  const StepStats& stats = sim_->solver().stats();
   if (stats.degenerate_constraints == 0 || stats.first_degenerate_constraint < 0) return;
   const DistanceConstraint& con = sim_->topology().stretch[stats.first_degenerate_constraint];
   ROS_WARN_THROTTLE(5.0,

@@ -4,6 +4,8 @@
 // (a compliance set to the value it has, which invalidates them) must end in the same place.
 #include <gtest/gtest.h>
 
+#include "collision_scenes.h"
+#include "pbd_cloth/sim_state.h"
 #include "pbd_cloth/simulation.h"
 #include "test_scenes.h"
 
@@ -55,6 +57,46 @@ TEST(StepPreparation, KeptOnlyWhileTheKinematicSetAndStepStand) {
   EXPECT_EQ(kept.particles().position, fresh.particles().position);
   EXPECT_EQ(kept.particles().velocity, fresh.particles().velocity);
   EXPECT_GT((kept.particles().position[11] - corner).norm(), 0.1) << "released, it falls";
+}
+
+// The step leaves out what only a report needs: Simulation::stats() measures the strain and the
+// penetration of the state when asked, once per state. Whatever changed the state since (a step,
+// direct access to the particles, a restored state, a reset), they describe the state as it is,
+// the same figures as computeMetrics().
+TEST(StepPreparation, StatsMeasureTheStateAsItIsWhenAsked) {
+  SceneConfig scene = test::clothScene(8, 8, 0.02, Method::kXpbd);
+  scene.cloth.pinned = {0, 7};
+  // A block 1 m below the pinned cloth: nothing touches it unless put there.
+  scene.obstacles = {test::box("block", Vec3(2.0, 2.0, 0.2), test::makePose(Vec3(0, 0, -1.1)))};
+  Simulation sim(scene);
+  auto expectMeasured = [&](const char* when) {
+    const Metrics metrics = sim.computeMetrics();
+    EXPECT_EQ(sim.stats().max_strain, metrics.max_strain) << when;
+    EXPECT_EQ(sim.stats().mean_strain, metrics.mean_strain) << when;
+    EXPECT_EQ(sim.stats().max_penetration, metrics.max_penetration) << when;
+  };
+  expectMeasured("built");
+  for (int k = 0; k < 20; ++k) sim.step();
+  expectMeasured("after 20 steps");
+  const double swinging = sim.stats().max_strain;
+  SimulationState saved;
+  sim.getState(saved);
+  // Particle 9 (row 1) pulled 1 cm sideways stretches its links; particle 63 put 5 cm deep into
+  // the block.
+  sim.mutableParticles().position[9].x() += 0.01;
+  sim.mutableParticles().position[63] = Vec3(0.0, 0.0, -1.05);
+  expectMeasured("particles moved");
+  EXPECT_GT(sim.stats().max_strain, swinging + 0.1);
+  EXPECT_GT(sim.stats().max_penetration, 0.04);
+  std::string reason;
+  ASSERT_TRUE(sim.setState(saved, reason)) << reason;
+  expectMeasured("state restored");
+  EXPECT_EQ(sim.stats().max_strain, swinging);
+  EXPECT_EQ(sim.stats().max_penetration, 0.0);
+  sim.mutableParticles().position[9].x() += 0.01;
+  sim.reset();
+  expectMeasured("reset");
+  EXPECT_EQ(sim.stats().max_strain, 0.0);  // the grid as built
 }
 
 }  // namespace
