@@ -71,7 +71,8 @@ class Simulation {
   // The last step's figures (the solver's, solver().stats()), with max_strain, mean_strain and
   // max_penetration of the state as it is now. Those three are measured here, when asked, once
   // per state, not in the step: a node stepping at 333 Hz and reporting at 30 Hz would measure
-  // ten states for each one it reports (a pass over every link and every particle's obstacles).
+  // eleven states for each one it reports (a pass over every link and every particle's
+  // obstacles).
   const StepStats& stats() const;
   const Solver& solver() const { return solver_; }
 
