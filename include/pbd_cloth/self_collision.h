@@ -59,6 +59,7 @@ struct SelfContactPair {
   bool local = false;
   double side = 0.0;       // s: +1 or -1; 0 until it is known (parallel edges at the step start)
   double allowance = 0.0;  // approach closer than h tolerated this step (allowanceFor)
+  double allowance_side = 0.0;  // the side the allowance was measured with (0: not measured)
   ContactState state;
 };
 
@@ -125,6 +126,9 @@ class SelfCollision {
   void preStabilize(Particles& particles, double thickness, double max_shift, double slop) const;
   // After pre-stabilisation: how much closer than h each contact may stay this step
   // (allowanceFor, `slop` a fraction of h), measured in `positions` (those of the step start).
+  // A pair measured earlier in the step with the side it has now keeps its allowance: the step's
+  // first search lists every pair anew, and later ones within the step pass the same positions,
+  // so it would measure the same (a local search keeps most pairs: only its new ones are measured).
   void measureAllowances(const Vec3Array& positions, double thickness, double slop);
 
   // One projection pass, then friction; returns the largest correction. Kinematic particles of a

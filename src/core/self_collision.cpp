@@ -170,6 +170,22 @@ bool edgeSide(const SelfContactPair& pair, const Vec3Array& x, double& side) {
   return true;
 }
 
+// The sign of the distance vertexTriangle gives, (q - p1) . n with n = p21 x p31 / |p21 x p31|,
+// as edgeSide gives edgeEdge's: in `side` (0 when it is 0), without the normal's square root and
+// the barycentric weights; false where vertexTriangle fails (a degenerate triangle).
+bool vertexSide(const SelfContactPair& pair, const Vec3Array& x, double& side) {
+  const Vec3& p1 = x[pair.index[1]];
+  const Vec3 e1 = x[pair.index[2]] - p1, e2 = x[pair.index[3]] - p1, v = x[pair.index[0]] - p1;
+  const Vec3 cross = e1.cross(e2);
+  const double area2 = cross.squaredNorm();
+  if (!(area2 > kDegenerate * e1.squaredNorm() * e2.squaredNorm())) return false;
+  double distance = v.dot(cross);
+  const double terms = v.cwiseProduct(cross).cwiseAbs().sum();
+  if (!(std::abs(distance) > 1e-12 * terms)) distance = v.dot(cross / std::sqrt(area2));
+  side = distance > 0.0 ? 1.0 : (distance < 0.0 ? -1.0 : 0.0);
+  return true;
+}
+
 bool allKinematic(const Particles& p, int a, int b, int c, int d) {
   return p.inverse_mass[a] == 0.0 && p.inverse_mass[b] == 0.0 && p.inverse_mass[c] == 0.0 &&
          p.inverse_mass[d] == 0.0;
@@ -667,7 +683,9 @@ void SelfCollision::preStabilize(Particles& p, double thickness, double max_shif
 
 void SelfCollision::measureAllowances(const Vec3Array& x, double thickness, double slop) {
   for (SelfContactPair& pair : pairs_) {
+    if (pair.side != 0.0 && pair.allowance_side == pair.side) continue;  // measured (header)
     pair.allowance = 0.0;
+    pair.allowance_side = pair.side;
     ContactGeometry g;
     if (pair.side != 0.0 && geometry(pair, x, g) && g.inside) {
       pair.allowance = allowanceFor(thickness - pair.side * g.distance, thickness, slop);
@@ -706,13 +724,21 @@ double SelfCollision::project(Particles& p, double thickness, int substep,
           pair.side = side;
         }
       } else {
-        ContactGeometry start;
-        if (!geometry(pair, p.substep_start, start)) {
-          if (pair.edge_edge) pair.side = 0.0;
-        } else if ((!start.inside || pair.side == 0.0 ||
-                    (pair.edge_edge && std::abs(start.distance) > kEdgeBand * thickness)) &&
-                   start.distance != 0.0) {
-          pair.side = start.distance > 0.0 ? 1.0 : -1.0;
+        // Where the start's distance has the sign of the side, every branch below keeps the side
+        // (or sets it to the same): that sign alone, without the closest points, settles most
+        // pairs (the layers of a fold, of a garment, resting on each other).
+        double start_side = 0.0;
+        const bool signed_start = pair.edge_edge ? edgeSide(pair, p.substep_start, start_side)
+                                                 : vertexSide(pair, p.substep_start, start_side);
+        if (!signed_start || start_side == 0.0 || start_side != pair.side) {
+          ContactGeometry start;
+          if (!geometry(pair, p.substep_start, start)) {
+            if (pair.edge_edge) pair.side = 0.0;
+          } else if ((!start.inside || pair.side == 0.0 ||
+                      (pair.edge_edge && std::abs(start.distance) > kEdgeBand * thickness)) &&
+                     start.distance != 0.0) {
+            pair.side = start.distance > 0.0 ? 1.0 : -1.0;
+          }
         }
       }
     }

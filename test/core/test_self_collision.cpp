@@ -559,5 +559,63 @@ TEST(SelfCollision, LocalSearchListsEveryPairWithinTwiceTheThickness) {
   expectLocalSearchListsEveryClosePair(shirt, {0, 30, 60}, "tshirt");
 }
 
+// measureAllowances runs after every search of a step, a local one included, and keeps the
+// allowance of a pair measured earlier in the step while its side stands (the same positions,
+// the step's start, and the same side: the same value). A side that changes is measured anew. A
+// 5 x 5 grid lies flat; its corner, particle 0, starts 0.3 h above a triangle of the cell (2, 2):
+// h - 0.3 h of overlap is allowed on the side it starts on. A substep that starts with the corner
+// beside the triangle and below its plane turns the pair's side over, and the same step-start
+// positions then allow h + 0.3 h.
+TEST(SelfCollision, AllowanceKeptWhileThePairsSideStands) {
+  SceneConfig scene = test::clothScene(5, 5, 0.1, Method::kXpbd);
+  scene.cloth.self_collision = true;
+  Simulation sim(scene);
+  Particles p = sim.particles();
+  const ClothTopology& topology = sim.topology();
+  const double h = 0.01, slop = 0.1, s = 0.1;
+  for (int i = 0; i < p.size(); ++i) p.position[i] = Vec3((i % 5) * s, (i / 5) * s, 0.0);
+  SelfCollision search;
+  search.reserve(p, topology);  // the tree at the flat rest shape
+  // A triangle with corners in the cell (2, 2)-(3, 3) only: 12, 13, 17, 18.
+  int t = -1;
+  for (int k = 0; k < topology.triangleCount() && t < 0; ++k) {
+    bool in_cell = true;
+    for (int e = 0; e < 3; ++e) {
+      const int v = static_cast<int>(topology.triangles[3 * k + e]);
+      in_cell = in_cell && (v == 12 || v == 13 || v == 17 || v == 18);
+    }
+    if (in_cell) t = k;
+  }
+  ASSERT_GE(t, 0);
+  const unsigned* corner = &topology.triangles[3 * t];
+  const Vec3 centroid =
+      (p.position[corner[0]] + p.position[corner[1]] + p.position[corner[2]]) / 3.0;
+  p.position[0] = centroid + Vec3(0.0, 0.0, 0.3 * h);
+  p.step_start = p.substep_start = p.position;
+  const Vec3Array move(p.size(), Vec3::Zero());
+  Vec3Array lo(p.position), hi(p.position), reaction(p.size(), Vec3::Zero());
+  search.findPairs(p, topology, MotionBounds{lo, hi, p.position, move, 0.5}, h, true, false);
+  auto pairOf = [&]() -> const SelfContactPair* {
+    for (const SelfContactPair& pair : search.pairs()) {
+      if (!pair.edge_edge && pair.index[0] == 0 && pair.triangle == t) return &pair;
+    }
+    return nullptr;
+  };
+  ASSERT_NE(pairOf(), nullptr) << "the corner over the triangle is a candidate";
+  search.measureAllowances(p.step_start, h, slop);
+  const double start_side = pairOf()->side;  // the triangle's normal decides which
+  ASSERT_NE(start_side, 0.0);
+  EXPECT_NEAR(pairOf()->allowance, allowanceFor(0.7 * h, h, slop), 1e-15);
+  // A substep starting with the corner 2 spacings aside and 0.5 h below the triangle's plane:
+  // outside it, so the side follows the start.
+  p.substep_start[0] = centroid + Vec3(2.0 * s, 0.0, -0.5 * h);
+  p.position = p.substep_start;
+  search.project(p, h, 1, FrictionConfig{0.0, 0.0}, reaction);
+  EXPECT_EQ(pairOf()->side, -start_side);
+  search.measureAllowances(p.step_start, h, slop);
+  EXPECT_NEAR(pairOf()->allowance, allowanceFor(1.3 * h, h, slop), 1e-15)
+      << "measured again with the side it has now";
+}
+
 }  // namespace
 }  // namespace pbd_cloth
