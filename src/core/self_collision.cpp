@@ -151,38 +151,40 @@ bool vertexApart(const SelfContactPair& pair, const Vec3Array& x, double gap) {
   return ((lo - v).array() > gap).any() || ((v - hi).array() > gap).any();
 }
 
+// The sign of r . n, n = cross / |cross| (|cross|^2 = cross_sq), as the geometry computes it:
+// r . cross has that sign unless it is within rounding of zero (each form is within a few ulp of
+// sum |r_i cross_i|), and only there the normalised form decides. 0 when it is 0.
+double signAlong(const Vec3& r, const Vec3& cross, double cross_sq) {
+  double distance = r.dot(cross);
+  const double terms = r.cwiseProduct(cross).cwiseAbs().sum();
+  if (!(std::abs(distance) > 1e-12 * terms)) distance = r.dot(cross / std::sqrt(cross_sq));
+  return distance > 0.0 ? 1.0 : (distance < 0.0 ? -1.0 : 0.0);
+}
+
 // The sign of the distance edgeEdge gives, (p1 - q1) . n with n = p21 x q21 / |p21 x q21|
-// computed as edgeEdge does (the same sign to the bit), in `side` (0 when it is 0), without the
-// closest points; false where edgeEdge fails (edges too near parallel).
+// (the same sign to the bit), in `side`, without the closest points; false where edgeEdge fails
+// (edges too near parallel).
 bool edgeSide(const SelfContactPair& pair, const Vec3Array& x, double& side) {
   const Vec3& p1 = x[pair.index[0]];
   const Vec3& q1 = x[pair.index[2]];
-  const Vec3 d1 = x[pair.index[1]] - p1, d2 = x[pair.index[3]] - q1, r = p1 - q1;
+  const Vec3 d1 = x[pair.index[1]] - p1, d2 = x[pair.index[3]] - q1;
   const Vec3 cross = d1.cross(d2);
   const double sine2 = cross.squaredNorm();
   if (!(sine2 > kParallel * d1.squaredNorm() * d2.squaredNorm())) return false;
-  // r . cross has the sign of r . (cross / |cross|) unless it is within rounding of zero (each
-  // form is within a few ulp of sum |r_i cross_i|): only there the normalised form decides.
-  double distance = r.dot(cross);
-  const double terms = r.cwiseProduct(cross).cwiseAbs().sum();
-  if (!(std::abs(distance) > 1e-12 * terms)) distance = r.dot(cross / std::sqrt(sine2));
-  side = distance > 0.0 ? 1.0 : (distance < 0.0 ? -1.0 : 0.0);
+  side = signAlong(p1 - q1, cross, sine2);
   return true;
 }
 
 // The sign of the distance vertexTriangle gives, (q - p1) . n with n = p21 x p31 / |p21 x p31|,
-// as edgeSide gives edgeEdge's: in `side` (0 when it is 0), without the normal's square root and
-// the barycentric weights; false where vertexTriangle fails (a degenerate triangle).
+// in `side`, without the barycentric weights; false where vertexTriangle fails (a degenerate
+// triangle).
 bool vertexSide(const SelfContactPair& pair, const Vec3Array& x, double& side) {
   const Vec3& p1 = x[pair.index[1]];
-  const Vec3 e1 = x[pair.index[2]] - p1, e2 = x[pair.index[3]] - p1, v = x[pair.index[0]] - p1;
+  const Vec3 e1 = x[pair.index[2]] - p1, e2 = x[pair.index[3]] - p1;
   const Vec3 cross = e1.cross(e2);
   const double area2 = cross.squaredNorm();
   if (!(area2 > kDegenerate * e1.squaredNorm() * e2.squaredNorm())) return false;
-  double distance = v.dot(cross);
-  const double terms = v.cwiseProduct(cross).cwiseAbs().sum();
-  if (!(std::abs(distance) > 1e-12 * terms)) distance = v.dot(cross / std::sqrt(area2));
-  side = distance > 0.0 ? 1.0 : (distance < 0.0 ? -1.0 : 0.0);
+  side = signAlong(x[pair.index[0]] - p1, cross, area2);
   return true;
 }
 
