@@ -180,10 +180,17 @@ class Simulation {
   void injectFaultForTesting(InjectedFault fault) { injected_fault_ = fault, inject_ = true; }
 
  private:
-  // stats(): the measures of the current state, and whether they are still current (a step, a
-  // reset, a restored state or direct access to the particles makes them stale).
-  mutable StepStats reported_stats_;
+  // stats(): the measures of the current state, whether they are still current (a step, a
+  // reset, a restored state or direct access to the particles makes them stale), and the
+  // solver's figures with them, as returned.
+  struct StateMeasures {
+    double max_strain = 0.0;
+    double mean_strain = 0.0;
+    double max_penetration = 0.0;
+  };
+  mutable StateMeasures measures_;
   mutable bool state_measured_ = false;
+  mutable StepStats reported_stats_;
   struct GripperState {
     Pose pose;          // pose at the end of the last step
     Pose target;        // pose at the end of the next step

@@ -528,16 +528,14 @@ void Simulation::stepAwake(double dt, bool targets_set) {
 
 const StepStats& Simulation::stats() const {
   if (!state_measured_) {
-    computeStrain(particles_, topology_, reported_stats_.max_strain, reported_stats_.mean_strain);
-    reported_stats_.max_penetration = collisions_.maxPenetration(particles_, topology_);
+    computeStrain(particles_, topology_, measures_.max_strain, measures_.mean_strain);
+    measures_.max_penetration = collisions_.maxPenetration(particles_, topology_);
     state_measured_ = true;
   }
-  const double max_strain = reported_stats_.max_strain, mean_strain = reported_stats_.mean_strain;
-  const double max_penetration = reported_stats_.max_penetration;
   reported_stats_ = solver_.stats();
-  reported_stats_.max_strain = max_strain;
-  reported_stats_.mean_strain = mean_strain;
-  reported_stats_.max_penetration = max_penetration;
+  reported_stats_.max_strain = measures_.max_strain;
+  reported_stats_.mean_strain = measures_.mean_strain;
+  reported_stats_.max_penetration = measures_.max_penetration;
   return reported_stats_;
 }
 
