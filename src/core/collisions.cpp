@@ -595,7 +595,7 @@ double Collisions::projectObstaclesOn(Particles& p, int i, bool first_pass, cons
     const double start_distance = signedDistance(shape, a, normal_a, hint);
     // The window's base is the particle's place on the shape when it began: carried by the
     // shape, it is the point under the particle that friction holds it to.
-    if (state.beginSubstep(substep_, step_, start_distance < (1.0 + kTouchGap) * r)) {
+    if (state.beginSubstep(substep_, step_, start_distance < (1.0 + kTouchGap) * r, true)) {
       state.base = a;
     }
     const double allowance = obstacle_allowance_[slot];

@@ -134,7 +134,8 @@ double ParticleContacts::project(Particles& p, int substep, int step,
     const double contact_distance = p.radius[i] + p.radius[j];
     ContactState& state = pair.state;
     const Vec3 start = p.substep_start[i] - p.substep_start[j];
-    if (state.beginSubstep(substep, step, start.norm() < (1.0 + kTouchGap) * contact_distance)) {
+    if (state.beginSubstep(substep, step, start.norm() < (1.0 + kTouchGap) * contact_distance,
+                           false)) {
       state.base = start;
     }
     const Vec3 delta = p.position[i] - p.position[j];

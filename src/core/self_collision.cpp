@@ -702,7 +702,7 @@ double SelfCollision::project(Particles& p, double thickness, int substep,
     ContactState& state = pair.state;
     // A window of one substep: the relative displacement is measured from substep_start, since
     // the point under the vertex (or the edges' closest points) changes as the layers slide.
-    if (state.beginSubstep(substep, substep, false)) {
+    if (state.beginSubstep(substep, substep, false, false)) {
       // Beside the triangle (edges not facing each other) the vertex may go round the border to
       // the other side (a hinge neighbour rotating about the shared edge, a layer sliding past a
       // fold): the side only freezes while the contact is active, where changing it means
