@@ -48,9 +48,9 @@ struct ContactState {
   // corrections, static friction would pull the particle back to where the window began: several
   // substeps' slip undone in one, which the velocity update turns into a speed of slip / h
   // against the motion. A T-shirt lying on a table (config/tshirt.yaml) never came to rest that
-  // way: 25-30 particles kept moving at up to 0.8 m/s at 20 substeps, and at 30 and 40 substeps,
-  // where h is smaller, more than a thousand reached 10-15 m/s (doc/performance.md, "Friction
-  // that gave slip back"). Obstacle contacts pass true. Particle-particle contacts pass false:
+  // way: 23-32 particles kept moving at up to 0.8 m/s at 20 substeps, and at 30 and 40 substeps,
+  // where h is smaller, 500-1200 reached 9-15 m/s (doc/performance.md, "Friction that gave slip
+  // back"). Obstacle contacts pass true. Particle-particle contacts pass false:
   // in a granular pile the slip that one Gauss-Seidel pass leaves is what the running window
   // catches up (above), and with a new window after each slip the pile's angle spread from
   // 25.4-28.9 to 20.9-27.6 deg over 10 to 40 substeps (test_granular.cpp).
