@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <iterator>
 #include <set>
 #include <vector>
 
@@ -42,18 +43,44 @@ std::set<int64_t> clockValues(const std::vector<rosgraph_msgs::Clock>& clocks) {
   return values;
 }
 
-// The states whose stamp lies within the recorded /clock values, and how many of them are one.
-void countStampsInClock(const std::vector<ClothState>& states,
-                        const std::vector<rosgraph_msgs::Clock>& clocks, int& within, int& found) {
-  within = found = 0;
-  if (clocks.empty()) return;
+// How the states whose stamp lies within the recorded /clock values compare with them.
+struct StampsInClock {
+  int within = 0;  // states stamped between the first and the last recorded /clock value
+  int found = 0;   // of those, stamped exactly at a recorded /clock value
+  // Of those not found, stamped between two recorded /clock values that are consecutive ticks
+  // (no more than 1.5 typical ticks apart): no /clock message was lost there, so such a stamp is
+  // not a /clock value at all.
+  int between_consecutive = 0;
+};
+
+// The subscriber may lose /clock messages, which arrive at thousands a second (under load 1 % of
+// them was measured lost), so a state whose stamp was not received is checked against the gap it
+// falls in: a stamp in a gap left by lost messages proves nothing, one between two consecutive
+// ticks is a stamp that is not a /clock value.
+StampsInClock countStampsInClock(const std::vector<ClothState>& states,
+                                 const std::vector<rosgraph_msgs::Clock>& clocks) {
+  StampsInClock result;
+  if (clocks.size() < 2) return result;
   const std::set<int64_t> values = clockValues(clocks);
+  std::vector<int64_t> ticks;
+  for (auto it = std::next(values.begin()); it != values.end(); ++it) {
+    ticks.push_back(*it - *std::prev(it));
+  }
+  std::nth_element(ticks.begin(), ticks.begin() + ticks.size() / 2, ticks.end());
+  const double typical_tick = static_cast<double>(ticks[ticks.size() / 2]);
   for (const ClothState& s : states) {
     const int64_t stamp = static_cast<int64_t>(s.header.stamp.toNSec());
     if (stamp < *values.begin() || stamp > *values.rbegin()) continue;
-    ++within;
-    if (values.count(stamp) > 0) ++found;
+    ++result.within;
+    const auto upper = values.lower_bound(stamp);
+    if (*upper == stamp) {
+      ++result.found;
+      continue;
+    }
+    const int64_t lower = *std::prev(upper);
+    if (static_cast<double>(*upper - lower) <= 1.5 * typical_tick) ++result.between_consecutive;
   }
+  return result;
 }
 
 TEST(PublishClock, ClockRunsFasterThanWallTimeAndStampsAreItsValues) {
@@ -92,14 +119,18 @@ TEST(PublishClock, ClockRunsFasterThanWallTimeAndStampsAreItsValues) {
     // Origin 0: the stamp is the simulated time itself.
     EXPECT_NEAR(s.header.stamp.toSec(), s.stats.sim_time, 1e-6);
   }
-  int within = 0, found = 0;
-  countStampsInClock(recorded, clock_msgs, within, found);
-  std::printf("%d of %d ~state stamps found among %zu /clock values\n", found, within,
-              clock_msgs.size());
-  ASSERT_GE(within, 10);
-  // Each state's time is published on /clock right after it; the subscriber may lose a /clock
-  // message at thousands per second, so 99 % must match exactly.
-  EXPECT_GE(found, 0.99 * within) << "~state stamps are not /clock values";
+  const StampsInClock stamps = countStampsInClock(recorded, clock_msgs);
+  std::printf(
+      "%d of %d ~state stamps found among %zu /clock values; %d of the others lie between two "
+      "consecutive recorded ticks\n",
+      stamps.found, stamps.within, clock_msgs.size(), stamps.between_consecutive);
+  ASSERT_GE(stamps.within, 10);
+  // Each state's time is published on /clock right after it. A stamp missing from the recording
+  // must lie where /clock messages were lost, never between two consecutive ticks.
+  EXPECT_EQ(stamps.between_consecutive, 0) << "~state stamps that are not /clock values";
+  // And most are found outright (a lost message is the exception, not the rule: 98.9 % and more
+  // were found on a loaded 2-core machine).
+  EXPECT_GE(stamps.found, 0.9 * stamps.within) << "~state stamps are not /clock values";
 }
 
 TEST(PublishClock, ResetAnswersAndKeepsTheClockGoingForward) {
@@ -112,15 +143,28 @@ TEST(PublishClock, ResetAnswersAndKeepsTheClockGoingForward) {
   const std::size_t state_from = states.count();
   ASSERT_TRUE(pbd_cloth_test::callReset(node())) << "~reset did not answer";
 
-  ClothState reset;
-  ASSERT_TRUE(states.waitFrom(state_from, reset, 10.0, [](const ClothState& s) {
-    return s.stats.sim_time < 1e-9;
-  })) << "no reset state";
-  EXPECT_GT(reset.header.stamp, before.header.stamp) << "the reset took the clock back";
+  // A state's origin is its stamp less its simulated time: 0 until the reset, the time of the
+  // reset after it. The node publishes the reset state itself at once, but at thousands of states
+  // a second a busy connection may drop it (the publisher keeps 10), so the first state received
+  // after the reset stands for it: its origin is the reset's time.
+  const double origin_before = before.header.stamp.toSec() - before.stats.sim_time;
+  const auto origin = [](const ClothState& s) { return s.header.stamp.toSec() - s.stats.sim_time; };
+  ClothState first_after;
+  ASSERT_TRUE(states.waitFrom(state_from, first_after, 10.0, [&](const ClothState& s) {
+    return origin(s) > origin_before + 1e-6;
+  })) << "no state after the reset";
+  EXPECT_LT(first_after.stats.sim_time, 0.5) << "the reset did not restart the simulated time";
+  EXPECT_GT(origin(first_after), before.header.stamp.toSec()) << "the reset took the clock back";
+  for (const ClothState& s : states.since(state_from)) {
+    // The reset state itself, where it was received: at the reset's time.
+    if (s.stats.sim_time < 1e-9 && origin(s) > origin_before + 1e-6) {
+      EXPECT_NEAR(s.header.stamp.toSec(), origin(first_after), 1e-6);
+    }
+  }
   ClothState after;
   ASSERT_TRUE(
       states.waitForNext(after, 10.0, [](const ClothState& s) { return s.stats.sim_time > 0.5; }));
-  EXPECT_NEAR(after.header.stamp.toSec() - after.stats.sim_time, reset.header.stamp.toSec(), 1e-6);
+  EXPECT_NEAR(origin(after), origin(first_after), 1e-6) << "the origin moved after the reset";
   const std::vector<rosgraph_msgs::Clock> clock_msgs = clocks.since(clock_from);
   ASSERT_GE(clock_msgs.size(), 2u);
   for (std::size_t k = 1; k < clock_msgs.size(); ++k) {
