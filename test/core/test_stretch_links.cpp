@@ -4,7 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <thread>
 
 #include "pbd_cloth/cloth_builder.h"
 #include "pbd_cloth/simulation.h"
@@ -329,6 +331,31 @@ TEST(StretchLinks, EveryThreadCountGivesTheSameCloth) {
   EXPECT_NE(ends[0], without_sphere);
 }
 
+// solver.threads changed between steps (Simulation::setSolverConfig, as a program tuning a running
+// simulation would): the cloth is the one of a single thread all along. Before the pool checked
+// which job a new worker may take, a worker started after jobs had run took the last one again
+// (a freed lambda): WorkerPool.ResizingBetweenRunsRunsEveryIndexOnce crashed there.
+TEST(StretchLinks, ThreadsChangedBetweenStepsGiveTheSameCloth) {
+  SceneConfig scene = test::clothScene(40, 40, 0.025, Method::kXpbd);
+  scene.cloth.pinned = {0, 39};
+  scene.solver.substeps = 8;
+  Simulation single(scene);
+  Simulation changed(scene);
+  for (int threads : {2, 3, 1, 2}) {
+    SolverConfig solver = changed.scene().solver;
+    solver.threads = threads;
+    changed.setSolverConfig(solver);
+    for (int step = 0; step < 10; ++step) {
+      single.step();
+      changed.step();
+    }
+  }
+  EXPECT_EQ(changed.particles().position, single.particles().position);
+  EXPECT_GT(
+      (single.particles().position[1599] - Simulation(scene).particles().position[1599]).norm(),
+      0.1);
+}
+
 // The pool calls every thread index exactly once per run, and run() returns only when all are
 // done, over many quick runs (the solver's pattern: several per substep).
 TEST(WorkerPool, EveryIndexRunsOncePerRun) {
@@ -348,6 +375,41 @@ TEST(WorkerPool, EveryIndexRunsOncePerRun) {
   auto job = [&](int t) { ++calls[t]; };
   pool.run(job);
   EXPECT_EQ(calls[0], 20001);
+}
+
+// Between runs the workers fall asleep (as they do through a garment's serial self-contacts); the
+// caller then claims the indices they have not taken yet. Every index still runs exactly once per
+// run, whoever runs it, and run() returns only when all are done.
+TEST(WorkerPool, IndicesOfSleepingWorkersRunOnceEach) {
+  WorkerPool pool;
+  pool.resize(3);
+  std::vector<int> calls(3, 0);
+  for (int run = 0; run < 200; ++run) {
+    // Longer than the workers' spinning (20-50 us): they wait on the condition variable.
+    std::this_thread::sleep_for(std::chrono::microseconds(run % 4 == 0 ? 2000 : 50));
+    auto job = [&](int t) { ++calls[t]; };
+    pool.run(job);
+    ASSERT_EQ(calls[0], run + 1);
+    ASSERT_EQ(calls[1], run + 1);
+    ASSERT_EQ(calls[2], run + 1);
+  }
+}
+
+// A new thread count between runs (solver.threads changed at run time): the new workers start
+// after jobs have run, and must not take an old job for a new one.
+TEST(WorkerPool, ResizingBetweenRunsRunsEveryIndexOnce) {
+  WorkerPool pool;
+  for (int threads : {2, 3, 2, 1, 3, 2}) {
+    pool.resize(threads);
+    ASSERT_EQ(pool.threads(), threads);
+    std::vector<int> calls(threads, 0);
+    for (int run = 0; run < 500; ++run) {
+      auto job = [&](int t) { ++calls[t]; };
+      pool.run(job);
+    }
+    for (int t = 0; t < threads; ++t)
+      EXPECT_EQ(calls[t], 500) << threads << " threads, index " << t;
+  }
 }
 
 }  // namespace
