@@ -66,9 +66,13 @@ class Solver {
 
  private:
   void predict(double h, double s_end, Particles& p);
+  void updateAndPredict(double h, double s_end, Particles& p);
+  // The free particles' update (of the substep ending), prediction (of the substep to s_end), or
+  // both in one pass; kinematic particles take their prescribed motion.
+  void advance(double h, double s_end, bool update, bool predict, Particles& p);
   double projectPass(double h, Particles& p, const ClothTopology& topology, Collisions& collisions,
                      bool first_pass);
-  double projectStretch(double h, Particles& p, const ClothTopology& topology);
+  double projectStretch(double h, Particles& p, const ClothTopology& topology, bool first_pass);
   double projectBend(double h, Particles& p, const ClothTopology& topology, bool first_pass);
   double projectFlatBend(Particles& p, const ClothTopology& topology, bool first_pass);
   bool flatBend(const ClothTopology& topology) const;
@@ -119,7 +123,6 @@ class Solver {
   Vec3Array jacobi_delta_;         // Jacobi: summed corrections per particle
   std::vector<int> jacobi_count_;  // Jacobi: stretch and bend constraints on each free particle
   Vec3Array force_;                // mass_spring: force accumulator
-  Vec3Array predicted_;            // x~ = x_prev + h v~ of the current substep (free particles)
   std::vector<int> kinematic_particles_;  // the step's kinematic particles (startReactions)
   Vec3Array kinematic_velocity_;          // a kinematic particle's velocity kept across predict()
   // solver.chebyshev: each particle's position before the current pass (q^k) and before the one

@@ -102,6 +102,9 @@ struct StretchProjection {
   // solver.tolerance reads: without it the pass leaves out a multiplication and two maxima per
   // link, and max_change stays 0.
   bool track_change = true;
+  // The first pass of a substep, where every multiplier starts at zero (XPBD, Algorithm 1): lambda
+  // is written and not read, so the substep needs no pass of its own to clear it.
+  bool lambda_from_zero = false;
 };
 
 struct StretchPassResult {

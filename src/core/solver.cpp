@@ -76,12 +76,12 @@ void Solver::configure(const SolverConfig& solver, const ClothConfig& cloth) {
   sizeChebyshevBuffers();  // solver.chebyshev may have been switched on or off
 }
 
-// One position a particle for each buffer while solver.chebyshev is on (predicted_ has the
-// particle count prepare() saw); released while it is off.
+// One position a particle for each buffer while solver.chebyshev is on (force_ has the particle
+// count prepare() saw); released while it is off.
 void Solver::sizeChebyshevBuffers() {
   if (config_.chebyshev > 0.0) {
-    chebyshev_current_.assign(predicted_.size(), Vec3::Zero());
-    chebyshev_previous_.assign(predicted_.size(), Vec3::Zero());
+    chebyshev_current_.assign(force_.size(), Vec3::Zero());
+    chebyshev_previous_.assign(force_.size(), Vec3::Zero());
   } else {
     Vec3Array().swap(chebyshev_current_);
     Vec3Array().swap(chebyshev_previous_);
@@ -101,7 +101,6 @@ void Solver::prepare(const Particles& particles, const ClothTopology& topology) 
   jacobi_delta_.assign(n, Vec3::Zero());
   jacobi_count_.assign(n, 0);
   force_.assign(n, Vec3::Zero());
-  predicted_.assign(n, Vec3::Zero());
   sizeChebyshevBuffers();
   kinematic_velocity_.assign(n, Vec3::Zero());
   kinematic_particles_.clear();
@@ -193,38 +192,50 @@ double Solver::dampingFactor(double h) const { return std::exp(-config_.damping 
 
 namespace {
 
-// Every particle's prediction of a substep as if it were free (seed: v += h g, x += h v; XPBD
-// Algorithm 1, lines 3-4), on the flat coordinate arrays: one loop with no branch over distinct
-// arrays (restrict), straight vector code. Solver::predict then puts the kinematic particles
-// back: their velocity as it was, their position on their target; their x~ is never read.
-// The body is inlined into two builds, AVX2 and the baseline, chosen at run time as the stretch
-// links' (stretch_links.h; not function multiversioning, whose load-time resolvers the sanitizer
-// builds cannot run); no FMA in either, so both round alike.
 #if defined(__GNUC__)
 #define PBD_INLINE inline __attribute__((always_inline))
 #else
 #define PBD_INLINE inline
 #endif
 struct PredictArgs {
-  int begin, end;  // particles
-  double keep, h, dv_x, dv_y, dv_z;
-  double *x, *v, *start, *predicted;  // flat coordinates
+  int begin = 0, end = 0;  // particles
+  double keep = 1.0, h = 0.0, inv_h = 0.0, dv_x = 0.0, dv_y = 0.0, dv_z = 0.0;
+  double *x = nullptr, *v = nullptr, *start = nullptr;  // flat coordinates
 };
 
-PBD_INLINE void predictAsFree(const PredictArgs& a) {
+// One coordinate k of a particle: the prediction x~ = x + h (e^{-c h} v + h g) of a substep, and
+// the velocity update v <- v + (x - x~) / h that ends it (XPBD Algorithm 1, line 11, written as a
+// change of velocity: the same as (x - x_prev) / h up to rounding, and exact for a free particle
+// no constraint moved). The update needs no stored x~: while a substep runs nothing writes v or
+// the substep's start, so start + h v is the prediction again, to the bit (the same operands and
+// operation as x += h v).
+PBD_INLINE void predictCoordinate(int k, int q, const double* dv, const PredictArgs& a,
+                                  double* __restrict x, double* __restrict v,
+                                  double* __restrict start) {
+  start[k] = x[k];
+  v[k] = a.keep * v[k] + dv[q];
+  x[k] += a.h * v[k];
+}
+
+PBD_INLINE void updateCoordinate(int k, const PredictArgs& a, const double* __restrict x,
+                                 double* __restrict v, const double* __restrict start) {
+  v[k] += (x[k] - (start[k] + a.h * v[k])) * a.inv_h;
+}
+
+// Over particles [begin, end), four (twelve coordinates, three AVX2 registers) at a time, the
+// rest one by one: one loop with no branch over distinct arrays (restrict), straight vector code.
+// `update` ends the last substep first, `predict` starts the next: both in one pass over the
+// arrays (Solver::updateAndPredict) read and write each coordinate once instead of twice.
+template <bool update, bool predict>
+PBD_INLINE void advanceFree(const PredictArgs& a) {
   double* __restrict x = a.x;
   double* __restrict v = a.v;
   double* __restrict start = a.start;
-  double* __restrict predicted = a.predicted;
-  const double keep = a.keep, h = a.h;
-  // Four particles (twelve coordinates, three AVX2 registers) at a time, the rest one by one.
   const double dv[12] = {a.dv_x, a.dv_y, a.dv_z, a.dv_x, a.dv_y, a.dv_z,
                          a.dv_x, a.dv_y, a.dv_z, a.dv_x, a.dv_y, a.dv_z};
   auto advance = [&](int k, int q) {
-    start[k] = x[k];
-    v[k] = keep * v[k] + dv[q];
-    x[k] += h * v[k];
-    predicted[k] = x[k];
+    if (update) updateCoordinate(k, a, x, v, start);
+    if (predict) predictCoordinate(k, q, dv, a, x, v, start);
   };
   int i = a.begin;
   for (; i + 4 <= a.end; i += 4) {
@@ -235,39 +246,26 @@ PBD_INLINE void predictAsFree(const PredictArgs& a) {
   }
 }
 
-// v <- v + (x - x~) / h over flat coordinates [begin, end) (XPBD Algorithm 1, line 11, written as
-// a change of velocity: the same as (x - x_prev) / h up to rounding, and exact for a free
-// particle no constraint moved). Built twice as predictAsFree.
-PBD_INLINE void updateAsFree(int begin, int end, double inv_h, const double* __restrict x,
-                             const double* __restrict predicted, double* __restrict v) {
-  for (int k = begin; k < end; ++k) v[k] += (x[k] - predicted[k]) * inv_h;
-}
-
+// Every particle's prediction, update, or both, as if it were free (seed: v += h g, x += h v;
+// XPBD Algorithm 1, lines 3-4 and 11). Solver::predict and Solver::updateVelocities then put the
+// kinematic particles right. The body is inlined into two builds, AVX2 and the baseline, chosen
+// at run time as the stretch links' (stretch_links.h; not function multiversioning, whose
+// load-time resolvers the sanitizer builds cannot run); no FMA in either, so both round alike.
 #if defined(__x86_64__) && defined(__GNUC__)
-__attribute__((target("avx2"))) void predictAvx2(const PredictArgs& a) { predictAsFree(a); }
-__attribute__((target("avx2"))) void updateAvx2(int begin, int end, double inv_h, const double* x,
-                                                const double* predicted, double* v) {
-  updateAsFree(begin, end, inv_h, x, predicted, v);
+template <bool update, bool predict>
+__attribute__((target("avx2"))) void advanceFreeAvx2(const PredictArgs& a) {
+  advanceFree<update, predict>(a);
 }
 #endif
 
-void predictFree(const PredictArgs& a, bool avx2) {
+template <bool update, bool predict>
+void advanceFree(const PredictArgs& a, bool avx2) {
 #if defined(__x86_64__) && defined(__GNUC__)
-  if (avx2) return predictAvx2(a);
+  if (avx2) return advanceFreeAvx2<update, predict>(a);
 #else
   (void)avx2;
 #endif
-  predictAsFree(a);
-}
-
-void updateFree(int begin, int end, double inv_h, const double* x, const double* predicted,
-                double* v, bool avx2) {
-#if defined(__x86_64__) && defined(__GNUC__)
-  if (avx2) return updateAvx2(begin, end, inv_h, x, predicted, v);
-#else
-  (void)avx2;
-#endif
-  updateAsFree(begin, end, inv_h, x, predicted, v);
+  advanceFree<update, predict>(a);
 }
 
 }  // namespace
@@ -277,25 +275,53 @@ void updateFree(int begin, int end, double inv_h, const double* x, const double*
 // increment: a body at rest feels the full g h^2 and a damped link settles at the undamped static
 // stretch (a viscous damper exerts no force at rest; REFERENCE_CASES.md case 6). Kinematic
 // particles take their prescribed position at fraction s_end of the step instead.
-void Solver::predict(double h, double s_end, Particles& p) {
+void Solver::predict(double h, double s_end, Particles& p) { advance(h, s_end, false, true, p); }
+
+// The velocity update of a substep and the prediction of the next, in one pass over the particles
+// (each coordinate read and written once, not twice): the same operations in the same order as
+// updateVelocities then predict, so the same result to the bit.
+void Solver::updateAndPredict(double h, double s_end, Particles& p) {
+  advance(h, s_end, true, true, p);
+}
+
+void Solver::advance(double h, double s_end, bool update, bool predict, Particles& p) {
   const int n = p.size();
   if (n == 0) return;
-  const double keep = dampingFactor(h);
   const Vec3 dv = h * config_.gravity;
+  PredictArgs args;
+  args.keep = dampingFactor(h);
+  args.h = h;
+  args.inv_h = 1.0 / h;
+  args.dv_x = dv[0];
+  args.dv_y = dv[1];
+  args.dv_z = dv[2];
+  args.x = p.position.front().data();
+  args.v = p.velocity.front().data();
+  args.start = p.substep_start.front().data();
   const bool avx2 = config_.simd && stretchLinksUseAvx2();
   // Threads take equal ranges of particles (each particle on its own).
   pool_.runRanges(n, [&](int begin, int end, int) {
+    // A kinematic particle's velocity is the one it moved with over the substep, (x - x_start) /
+    // h; a prediction keeps it (the free particles' arithmetic runs on it too, and is undone).
     for (int i : kinematic_particles_) {
-      if (i >= begin && i < end) kinematic_velocity_[i] = p.velocity[i];
+      if (i < begin || i >= end) continue;
+      kinematic_velocity_[i] =
+          update ? Vec3((p.position[i] - p.substep_start[i]) * args.inv_h) : p.velocity[i];
     }
-    predictFree(
-        {begin, end, keep, h, dv[0], dv[1], dv[2], p.position.front().data(),
-         p.velocity.front().data(), p.substep_start.front().data(), predicted_.front().data()},
-        avx2);
+    PredictArgs range = args;
+    range.begin = begin;
+    range.end = end;
+    if (update && predict) {
+      advanceFree<true, true>(range, avx2);
+    } else if (update) {
+      advanceFree<true, false>(range, avx2);
+    } else {
+      advanceFree<false, true>(range, avx2);
+    }
     for (int i : kinematic_particles_) {
       if (i < begin || i >= end) continue;
       p.velocity[i] = kinematic_velocity_[i];
-      p.position[i] = (1.0 - s_end) * p.kinematic_from[i] + s_end * p.kinematic_to[i];
+      if (predict) p.position[i] = (1.0 - s_end) * p.kinematic_from[i] + s_end * p.kinematic_to[i];
     }
   });
 }
@@ -319,7 +345,8 @@ double Solver::jacobiScale(int i, int j) const {
 // Stretch constraints C = |x_i - x_j| - l0 (seed eq. C2). verlet: rigid projection weighted by
 // inverse mass (the seed's stick, x1 -= w1/(w1+w2) C n); pbd: the same scaled by k';
 // xpbd: dlambda = (-C - alpha~ lambda) / (w_i + w_j + alpha~), alpha~ = alpha / h^2 (XPBD eq. 18).
-double Solver::projectStretch(double h, Particles& p, const ClothTopology& topology) {
+double Solver::projectStretch(double h, Particles& p, const ClothTopology& topology,
+                              bool first_pass) {
   const bool xpbd = config_.method == Method::kXpbd;
   const bool jacobi = config_.ordering == Ordering::kJacobi;
   const bool average = jacobi && config_.jacobi_averaging;
@@ -334,6 +361,7 @@ double Solver::projectStretch(double h, Particles& p, const ClothTopology& topol
     how.stiffness = k;
     how.simd = config_.simd;
     how.track_change = tracksLargestChange();
+    how.lambda_from_zero = first_pass;
     double* x = p.position.front().data();
     StretchPassResult result;
     const int threads = pool_.threads();
@@ -603,7 +631,7 @@ double Solver::projectPass(double h, Particles& p, const ClothTopology& topology
     max_change =
         coarse_.project(p, config_.levels_interpolate, config_.simd, tracksLargestChange());
   }
-  max_change = std::max(max_change, projectStretch(h, p, topology));
+  max_change = std::max(max_change, projectStretch(h, p, topology, first_pass));
   max_change = std::max(max_change, projectBend(h, p, topology, first_pass));
   if (config_.ordering == Ordering::kJacobi) applyJacobi(p, max_change);
   max_change = std::max(max_change, projectTethers(p, topology));
@@ -650,20 +678,7 @@ double Solver::accelerate(int pass, double omega, Particles& p) {
 // instead of re-deriving it from two large positions (1e4 m from the origin, x - x_prev loses 1e-9
 // of v per substep to rounding, 1.5e-5 m over a 1 s fall at 6 kHz; REFERENCE_CASES.md,
 // "Precision"). Kinematic particles take the velocity of their prescribed motion.
-void Solver::updateVelocities(double h, Particles& p) {
-  const int n = p.size();
-  if (n == 0) return;
-  const double inv_h = 1.0 / h;
-  const bool avx2 = config_.simd && stretchLinksUseAvx2();
-  pool_.runRanges(n, [&](int begin, int end, int) {
-    updateFree(3 * begin, 3 * end, inv_h, p.position.front().data(), predicted_.front().data(),
-               p.velocity.front().data(), avx2);
-    // A kinematic particle's velocity is the one it moved with: (x - x_start) / h.
-    for (int i : kinematic_particles_) {
-      if (i >= begin && i < end) p.velocity[i] = (p.position[i] - p.substep_start[i]) * inv_h;
-    }
-  });
-}
+void Solver::updateVelocities(double h, Particles& p) { advance(h, 1.0, true, false, p); }
 
 // The explicit baseline: spring and damper forces, then symplectic Euler. Stable only while
 // w_max h < 2 (REFERENCE_CASES.md case 8). Contacts are still projected, so the chart compares the
@@ -715,8 +730,7 @@ void Solver::massSpringSubstep(double h, double s_end, Particles& p, const Cloth
       continue;
     }
     p.velocity[i] = keep * p.velocity[i] + h * p.inverse_mass[i] * force_[i];
-    p.position[i] += h * p.velocity[i];
-    predicted_[i] = p.position[i];
+    p.position[i] += h * p.velocity[i];  // x~ = start + h v, as updateVelocities reads it
   }
   for (int pass = 0; pass < config_.iterations; ++pass) {
     ++stats_.iterations;
@@ -850,15 +864,18 @@ void Solver::step(double dt, Particles& p, const ClothTopology& topology, Collis
       stats_.update_time += seconds(t1, Clock::now());
       continue;
     }
-    predict(h, s_end, p);
+    // Predict; from the second substep on, fused with the last substep's velocity update.
+    if (s == 0) {
+      predict(h, s_end, p);
+    } else {
+      updateAndPredict(h, s_end, p);
+    }
     t1 = Clock::now();
     stats_.predict_time += seconds(t0, t1);
 
-    // XPBD multipliers start at zero every substep (Small Steps, Algorithm 1).
-    // Only the array this step's stretch projection uses (stretchLambda reads the same one).
-    if (config_.ordering != Ordering::kJacobi && fastStretch(topology)) {
-      std::fill(link_lambda_.begin(), link_lambda_.end(), 0.0);
-    } else {
+    // XPBD multipliers start at zero every substep (Small Steps, Algorithm 1). The flat links'
+    // first pass writes theirs (projectStretch, lambda_from_zero); the others are cleared here.
+    if (config_.ordering == Ordering::kJacobi || !fastStretch(topology)) {
       std::fill(stretch_lambda_.begin(), stretch_lambda_.end(), 0.0);
     }
     // The flat hinges' first pass writes theirs (projectFlatHinges, lambda_from_zero).
@@ -876,8 +893,11 @@ void Solver::step(double dt, Particles& p, const ClothTopology& topology, Collis
       if (tracksLargestChange() && max_change < config_.tolerance) break;
     }
     addMultiplierReactions(p, topology);
+    stats_.project_time += seconds(t1, Clock::now());
+  }
+  // The last substep's velocity update (the others ran with the next prediction).
+  if (config_.method != Method::kMassSpring && substeps > 0) {
     const auto t2 = Clock::now();
-    stats_.project_time += seconds(t1, t2);
     updateVelocities(h, p);
     stats_.update_time += seconds(t2, Clock::now());
   }

@@ -25,7 +25,12 @@ constexpr double kMinInverseMass = 1e-300;
 inline void projectOne(int c, const StretchLinks& links, const StretchProjection& how, double* x,
                        double* lambda, StretchPassResult& result) {
   const double inverse_denominator = links.inverse_denominator[c];
-  if (inverse_denominator == 0.0) return;  // no free end
+  // A link skipped this pass keeps its multiplier: zero at a substep's first pass.
+  const bool clear = how.lambda_from_zero && lambda != nullptr;
+  if (inverse_denominator == 0.0) {  // no free end
+    if (clear) lambda[c] = 0.0;
+    return;
+  }
   double* xa = x + 3 * links.i[c];
   double* xb = x + 3 * links.j[c];
   const double dx = xa[0] - xb[0], dy = xa[1] - xb[1], dz = xa[2] - xb[2];
@@ -33,11 +38,12 @@ inline void projectOne(int c, const StretchLinks& links, const StretchProjection
   if (length < kMinLength) {
     // No direction to push along: skipped this pass (the other links pull them apart), counted.
     if (result.degenerate++ == 0) result.first_degenerate = c;
+    if (clear) lambda[c] = 0.0;
     return;
   }
   double constraint = length - links.rest_length[c];
   if (how.unilateral) constraint = std::max(0.0, constraint);
-  const double old_lambda = lambda != nullptr ? lambda[c] : 0.0;
+  const double old_lambda = lambda != nullptr && !how.lambda_from_zero ? lambda[c] : 0.0;
   const double dlambda =
       (-how.stiffness * constraint - how.alpha * old_lambda) * inverse_denominator;
   if (lambda != nullptr) lambda[c] = old_lambda + dlambda;
@@ -137,7 +143,8 @@ PBD_AVX2 inline bool projectFour(int c, const StretchLinks& links, const Stretch
   const __m256d zero = _mm256_setzero_pd();
   __m256d constraint = _mm256_sub_pd(length, _mm256_loadu_pd(&links.rest_length[c]));
   if (how.unilateral) constraint = _mm256_max_pd(zero, constraint);
-  const __m256d old_lambda = lambda != nullptr ? _mm256_loadu_pd(&lambda[c]) : zero;
+  const __m256d old_lambda =
+      lambda != nullptr && !how.lambda_from_zero ? _mm256_loadu_pd(&lambda[c]) : zero;
   const __m256d dlambda =
       _mm256_mul_pd(_mm256_sub_pd(_mm256_mul_pd(_mm256_set1_pd(-how.stiffness), constraint),
                                   _mm256_mul_pd(_mm256_set1_pd(how.alpha), old_lambda)),

@@ -195,6 +195,49 @@ TEST(StretchLinks, LinksWithoutAFreeEndAreSkipped) {
   EXPECT_EQ(result.degenerate, 0);
 }
 
+// A substep's first pass starts every multiplier at zero (XPBD, Algorithm 1) by writing it, not by
+// a clearing pass: whatever the array held before, the pass ends with the positions and
+// multipliers of a pass from a cleared array. Links in registers, link by link (a group with
+// coincident ends), without a free end (both ends pinned) and compliant (alpha~ lambda enters the
+// step), on both paths; a stale multiplier read instead of zero changes the positions, and one
+// left unwritten keeps its garbage.
+TEST(StretchLinks, FirstPassWritesTheMultipliersFromZero) {
+  for (bool simd : {true, false}) {
+    std::vector<DistanceConstraint> list;
+    for (int k = 0; k < 4; ++k) list.push_back({k, k + 4, 1.0});   // one register of four
+    for (int k = 8; k < 12; ++k) list.push_back({k, k + 4, 1.0});  // four with coincident ends
+    list.push_back({16, 17, 1.0});                                 // both ends pinned
+    Vec3Array x(18, Vec3::Zero());
+    for (int k = 0; k < 16; ++k) x[k] = Vec3((k % 4) * 10.0, (k / 4) * 0.1, 0.0);
+    for (int k : {4, 5, 6, 7, 12, 13, 14, 15}) x[k] += Vec3(0.0, 1.5, 0.0);
+    x[14] = x[10];  // link 6: coincident ends
+    x[17] = Vec3(3.0, 0.0, 0.0);
+    std::vector<double> inverse_mass(18, 1.0);
+    inverse_mass[16] = inverse_mass[17] = 0.0;
+    StretchLinks links;
+    links.assign(list, 18);
+    links.prepareStep(inverse_mass.data(), 0.5);
+    StretchProjection how;
+    how.simd = simd;
+    how.alpha = 0.5;
+    Vec3Array cleared_x = x, stale_x = x;
+    std::vector<double> cleared(list.size(), 0.0), stale(list.size(), 7.0);
+    projectStretchLinks(links, 0, links.batchCount(), how, cleared_x.front().data(),
+                        cleared.data());
+    how.lambda_from_zero = true;
+    projectStretchLinks(links, 0, links.batchCount(), how, stale_x.front().data(), stale.data());
+    EXPECT_EQ(stale_x, cleared_x) << "simd " << simd;
+    EXPECT_EQ(stale, cleared) << "simd " << simd;
+    EXPECT_NE(cleared[0], 0.0);  // the links did act
+    // Reading the stale 7 instead of zero would have moved the ends differently.
+    how.lambda_from_zero = false;
+    std::vector<double> read(list.size(), 7.0);
+    Vec3Array read_x = x;
+    projectStretchLinks(links, 0, links.batchCount(), how, read_x.front().data(), read.data());
+    EXPECT_NE(read_x, cleared_x);
+  }
+}
+
 // What a task's registers load and store (every particle of each window, used or not) is touched
 // by no other task of its phase: a window that reached into another task's particles would write
 // back values that task may have moved meanwhile (a race that loses its move now and then). Both
