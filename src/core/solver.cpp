@@ -204,10 +204,9 @@ struct PredictArgs {
 };
 
 // One coordinate k of a particle: the prediction x~ = x + h (e^{-c h} v + h g) of a substep, and
-// the velocity update v <- v + (x - x~) / h that ends it (XPBD Algorithm 1, line 11, written as a
-// change of velocity: the same as (x - x_prev) / h up to rounding, and exact for a free particle
-// no constraint moved). The update needs no stored x~: while a substep runs nothing writes v or
-// the substep's start, so start + h v is the prediction again, to the bit (the same operands and
+// the velocity update v <- v + (x - x~) / h that ends it (why in that form: Solver::
+// updateVelocities). The update needs no stored x~: while a substep runs nothing writes v or the
+// substep's start, so start + h v is the prediction again, to the bit (the same operands and
 // operation as x += h v).
 PBD_INLINE void predictCoordinate(int k, int q, const double* dv, const PredictArgs& a,
                                   double* __restrict x, double* __restrict v,
