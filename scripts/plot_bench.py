@@ -555,17 +555,23 @@ def issue12_summary(add, data_dir, swinging, swinging100, fabric, towel, micro):
                 'per step (%d steps asleep): %.2g %% | %s |' % (
                     asleep, awake, int(number(run['asleep_steps'], 0)), 100.0 * asleep / awake,
                     'yes' if asleep <= 0.1 * awake else 'no'))
-    path = os.path.join(data_dir, 'self_collision_scaling.csv')
-    if os.path.exists(path):
-        with open(path, newline='') as handle:
-            rows = list(csv.DictReader(handle))
-        growth = [number(r.get('broad_plus_contact_on_per_doubling'))
-                  for r in rows if r.get('broad_plus_contact_on_per_doubling')]
-        if growth:
-            add('| 7 | self-collision broad phase + contacts <= x2.3 per doubling, 32 x 32 to 128 x '
-                '128 | %s (doc/self_collision_scaling.csv) | %s |' % (
-                    ', '.join('x%.2f' % g for g in growth),
-                    'yes' if max(growth) <= 2.3 else 'no'))
+    growth = {}
+    for name, csv_name in (('same size', 'self_collision_scaling.csv'),
+                           ('same density', 'self_collision_scaling_density.csv')):
+        path = os.path.join(data_dir, csv_name)
+        if os.path.exists(path):
+            with open(path, newline='') as handle:
+                rows = list(csv.DictReader(handle))
+            growth[name] = [number(r.get('broad_plus_contact_on_per_doubling'))
+                            for r in rows if r.get('broad_plus_contact_on_per_doubling')]
+    growth = {name: g for name, g in growth.items() if g}
+    if growth:
+        add('| 7 | self-collision broad phase + contacts <= x2.3 per doubling, 32 x 32 to 128 x '
+            '128 | %s (doc/self_collision_scaling.csv, _density.csv) | %s |' % (
+                '; '.join('%s: %s' % (name, ', '.join('x%.2f' % x for x in g))
+                          for name, g in growth.items()),
+                ', '.join('%s %s' % (name, 'yes' if max(g) <= 2.3 else 'no')
+                          for name, g in growth.items())))
 
 
 def extra_summaries(add, swinging100, fabric, towel):

@@ -31,8 +31,13 @@ constexpr double kWindowDoubles = 0.025;
 // the block one box test instead of one per particle (a robot's links, far from most of the
 // cloth: doc/performance.md, "Obstacles culled in blocks").
 constexpr int kCullBlock = 32;
-// A local search (Collisions::searchNear) for at most this many leavers per 1024 particles.
-constexpr int kMaxLocalLeavers = 64;
+// A local search (Collisions::searchNear) for at most this many leavers per 1024 particles; more,
+// and a whole search costs less: each leaver renews its leaves, refits their paths to the root and
+// traverses them against the tree, several times a whole search's cost per particle. 32 rather
+// than 64: the drape 1.49 to 1.34 ms a step, the drape tiled to 128 x 128 18.8 to 14.5 ms, the
+// rest the same; 16 and 24 kept a particle of the resting T-shirt moving at 0.04 m/s (it did not
+// fall asleep within 5 s). doc/performance.md, "Local searches".
+constexpr int kMaxLocalLeavers = 32;
 int mostLocalLeavers(int particles) { return kMaxLocalLeavers * particles / 1024; }
 
 // True when a sphere of radius r at x lies wholly outside the box [lo, hi]: it cannot touch a
