@@ -114,8 +114,9 @@ struct SolverConfig {
   // leaves its motion bounds; k >= substeps: once per step.
   int search_window = 0;
   // solver.sleep_speed (m/s) and solver.sleep_time (s): when every free particle has moved slower
-  // than sleep_speed for sleep_time, the scene sleeps: steps cost a check instead of a solve
-  // until something could move it (Simulation::step, "Sleeping"). 0 = never sleeps (the default,
+  // than sleep_speed for sleep_time (stayed within sleep_speed x sleep_time of where it was when
+  // that time began), the scene sleeps: steps cost a check instead of a solve until something
+  // could move it (Simulation::step, "Sleeping"). 0 = never sleeps (the default,
   // so benchmarks and accuracy tests always solve).
   double sleep_speed = 0.0;
   double sleep_time = 0.5;

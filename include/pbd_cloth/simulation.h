@@ -259,9 +259,12 @@ class Simulation {
   Vec3Array good_position_;
   std::uint64_t restored_steps_ = 0;
   bool last_step_restored_ = false;
-  // Sleeping: how long every free particle has been slower than solver.sleep_speed, whether the
-  // scene sleeps, the particles' bounds when it fell asleep, and the collider change count then.
+  // Sleeping: how long every free particle has stayed within sleep_speed x sleep_time of where it
+  // was when the stillness began (still_from_, sized in build()), whether the scene sleeps, the
+  // particles' bounds when it fell asleep, and the collider change count then.
   double still_time_ = 0.0;
+  bool still_begun_ = false;
+  Vec3Array still_from_;
   bool asleep_ = false;
   long slept_steps_ = 0;
   Vec3 sleep_lo_ = Vec3::Zero();

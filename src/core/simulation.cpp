@@ -114,6 +114,9 @@ void Simulation::build() {
   }
   time_ = 0.0;
   good_position_ = particles_.position;
+  still_from_ = particles_.position;
+  still_begun_ = false;
+  still_time_ = 0.0;
   last_step_restored_ = false;
   state_measured_ = false;
 }
@@ -426,7 +429,10 @@ void Simulation::updateKinematicTargets(double dt) {
 }
 
 // Sleeping. A scene whose free particles all stayed slower than solver.sleep_speed for
-// solver.sleep_time is at rest: its next solve would move nothing but rounding. It then sleeps:
+// solver.sleep_time is at rest: its next solve would move nothing but rounding. Slower on average:
+// each stayed within sleep_speed x sleep_time of where it was when the stillness began, so a
+// resting garment whose contacts nudge a particle by micrometres in one substep and back (a
+// velocity of a centimetre a second for that substep) still counts as still. It then sleeps:
 // a step checks what could move it, and while nothing does, only time advances (the particles
 // keep their positions, at zero velocity). It wakes, and that step solves, when a pinned or held
 // particle is to move, a collider moving near the particles' bounds (or enabled, disabled, set),
@@ -447,13 +453,30 @@ bool Simulation::canSleepThrough() const {
 void Simulation::updateSleep(double dt) {
   const double limit = scene_.solver.sleep_speed;
   if (limit <= 0.0) return;
-  double fastest_sq = 0.0;
+  // Where the stillness began: each particle's position then (still_from_, sized in build(); a
+  // particle count changed since, by a state set from outside, sizes it again).
+  auto beginStillness = [this] {
+    if (still_from_.size() != particles_.position.size()) still_from_.resize(particles_.size());
+    std::copy(particles_.position.begin(), particles_.position.end(), still_from_.begin());
+    still_begun_ = true;
+    still_time_ = 0.0;
+  };
+  if (!still_begun_ || still_from_.size() != particles_.position.size()) {
+    beginStillness();
+    return;
+  }
+  const double still_reach = limit * scene_.solver.sleep_time;
+  double farthest_sq = 0.0;
   for (int i = 0; i < particles_.size(); ++i) {
     if (!particles_.isKinematic(i)) {
-      fastest_sq = std::max(fastest_sq, particles_.velocity[i].squaredNorm());
+      farthest_sq = std::max(farthest_sq, (particles_.position[i] - still_from_[i]).squaredNorm());
     }
   }
-  still_time_ = fastest_sq < limit * limit ? still_time_ + dt : 0.0;
+  if (!(farthest_sq <= still_reach * still_reach)) {  // (a NaN is not still either)
+    beginStillness();
+    return;
+  }
+  still_time_ += dt;
   if (still_time_ + 1e-12 < scene_.solver.sleep_time || particles_.size() == 0) return;
   asleep_ = true;
   sleep_lo_ = sleep_hi_ = particles_.position[0];
@@ -471,6 +494,7 @@ void Simulation::updateSleep(double dt) {
 
 void Simulation::wake() {
   asleep_ = false;
+  still_begun_ = false;
   still_time_ = 0.0;
 }
 
