@@ -35,8 +35,9 @@ constexpr int kCullBlock = 32;
 // and a whole search costs less: each leaver renews its leaves, refits their paths to the root and
 // traverses them against the tree, several times a whole search's cost per particle. 32 rather
 // than 64: the drape 1.49 to 1.34 ms a step, the drape tiled to 128 x 128 18.8 to 14.5 ms, the
-// rest the same; 16 and 24 kept a particle of the resting T-shirt moving at 0.04 m/s (it did not
-// fall asleep within 5 s). doc/performance.md, "Local searches".
+// rest the same; with 16 and 24 three particles of the resting T-shirt took turns moving a few
+// micrometres a step, which kept it awake while sleep went by velocity. doc/performance.md,
+// "Local searches" and "Sleeping".
 constexpr int kMaxLocalLeavers = 32;
 int mostLocalLeavers(int particles) { return kMaxLocalLeavers * particles / 1024; }
 
