@@ -453,11 +453,11 @@ bool Simulation::canSleepThrough() const {
 void Simulation::updateSleep(double dt) {
   const double limit = scene_.solver.sleep_speed;
   if (limit <= 0.0) return;
-  // Where the stillness began: each particle's position then (still_from_, sized in build(); a
-  // particle count changed since, by a state set from outside, sizes it again).
+  // Where the stillness began: each particle's position then. still_from_ has the particles'
+  // count from build(), so the assignment copies without allocating (a count changed since, by
+  // a state set from outside, sizes it again).
   auto beginStillness = [this] {
-    if (still_from_.size() != particles_.position.size()) still_from_.resize(particles_.size());
-    std::copy(particles_.position.begin(), particles_.position.end(), still_from_.begin());
+    still_from_ = particles_.position;
     still_begun_ = true;
     still_time_ = 0.0;
   };
