@@ -69,7 +69,7 @@ class CoarseLevels {
     // The same links, flat and batched (no interpolation), between positions in `particles`,
     // projected on a packed copy of those particles' positions and inverse masses.
     StretchLinks flat;
-    std::vector<double> compact_position;  // x0 y0 z0 x1 ... of `particles`
+    ColumnPositions compact_position;  // the positions of `particles`, in columns
     std::vector<double> compact_inverse_mass;
     std::vector<Interpolated> finer_only;  // the finer level's particles not on this level
   };

@@ -102,6 +102,7 @@ class Solver {
   std::vector<double> stretch_lambda_;  // XPBD multipliers, reset every substep
   StretchLinks stretch_links_;          // topology.stretch in flat arrays and batches (prepare)
   std::vector<double> link_lambda_;     // their multipliers in stretch_links_' order
+  ColumnPositions link_positions_;      // the particles' positions in columns during the sweep
   // solver.threads: the workers, and each thread's tasks of each phase of the links (a range of
   // stretch_links_' tasks, balanced by link count): thread t of phase p runs tasks
   // [thread_tasks_[p * (T + 1) + t], thread_tasks_[p * (T + 1) + t + 1]).

@@ -6,7 +6,9 @@
 // the other (Gauss-Seidel) gives exactly what projecting them all at once from the same positions
 // gives. That lets four links go through one AVX2 register (the square root and the division, the
 // costly part, at once), and lets threads split a batch (solver.threads), with results that do not
-// depend on either: the order of the links is the order of the list, whatever runs it.
+// depend on either: the order of the links is the order of the list, whatever runs it. The
+// projection reads and writes the positions in columns (PositionColumns, below), where four
+// consecutive particles' coordinates load without shuffles.
 //
 // Runtime dispatch: the AVX2 path is compiled for that instruction set only (a function target
 // attribute) and chosen at run time when the processor has it; any other x86-64 (a lab's older
@@ -45,8 +47,9 @@ struct StretchLinks {
 
   // How a run of links is laid out in memory, found once in assign(). A grid's batches are rows
   // of links whose ends step through the particles regularly; four such links are loaded and
-  // stored as whole registers (three per four particles), without gathers. kScalar: one link at a
-  // time (a mesh's links, the ends of a batch, a group with a coincident pair).
+  // stored as whole registers (one per coordinate of four consecutive particles in the columns,
+  // PositionColumns), without gathers. kScalar: one link at a time (a mesh's links, the ends of a
+  // batch, a group with a coincident pair).
   enum class Layout : int {
     kScalar,       // [begin, end): any links, projected one by one
     kContiguous,   // 4 links: i = i0 + k, j = j0 + k (vertical and diagonal grid links)
@@ -114,12 +117,42 @@ struct StretchPassResult {
   void merge(const StretchPassResult& other);
 };
 
+// The particles' positions as three columns, x[p], y[p] and z[p] (a structure of arrays), the
+// form the projection works on: four consecutive particles' x (or y, or z) are one register load,
+// where Vec3Array's interleaved x0 y0 z0 x1 ... needs three loads and six shuffles for four
+// particles' coordinates, and as many to store them (doc/performance.md, "Positions in columns").
+struct PositionColumns {
+  double* x = nullptr;
+  double* y = nullptr;
+  double* z = nullptr;
+};
+
+// Storage for the columns of `count` particles, sized outside the step (resize allocates;
+// columns() does not).
+class ColumnPositions {
+ public:
+  void resize(int count);
+  int size() const { return count_; }
+  PositionColumns columns();
+
+ private:
+  std::vector<double> storage_;
+  int count_ = 0;
+};
+
+// Copies particles [begin, end) between Vec3Array storage (x0 y0 z0 x1 ...) and columns, exactly
+// (AVX2 shuffles where there and simd, else a plain loop). Allocates nothing.
+void positionsToColumns(const double* interleaved, int begin, int end, PositionColumns columns,
+                        bool simd);
+void positionsFromColumns(PositionColumns columns, int begin, int end, double* interleaved,
+                          bool simd);
+
 // Projects the links of batches [first_batch, end_batch) in order, after links.prepareStep:
-// position is the particles' positions as x0 y0 z0 x1 ... (Vec3Array's storage), lambda one
-// multiplier per link (accumulated; nullptr: links without a multiplier, taken as zero, e.g. the
-// unilateral coarse links). Links with no free particle are skipped. Allocates nothing.
+// position is the particles' positions in columns, lambda one multiplier per link (accumulated;
+// nullptr: links without a multiplier, taken as zero, e.g. the unilateral coarse links). Links
+// with no free particle are skipped. Allocates nothing.
 StretchPassResult projectStretchLinks(const StretchLinks& links, int first_batch, int end_batch,
-                                      const StretchProjection& how, double* position,
+                                      const StretchProjection& how, PositionColumns position,
                                       double* lambda);
 
 // Whether projectStretchLinks takes the AVX2 path on this processor (with how.simd).

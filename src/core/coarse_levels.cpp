@@ -134,7 +134,7 @@ void CoarseLevels::build(int rows, int cols, double spacing, int levels) {
       flat.push_back({link.local_i, link.local_j, link.rest_length});
     }
     level.flat.assign(flat, static_cast<int>(level.particles.size()));
-    level.compact_position.assign(3 * level.particles.size(), 0.0);
+    level.compact_position.resize(static_cast<int>(level.particles.size()));
     level.compact_inverse_mass.assign(level.particles.size(), 0.0);
     largest = std::max(largest, level.particles.size());
     finer_carried = level.carried;
@@ -174,12 +174,12 @@ double CoarseLevels::project(Particles& p, bool interpolate, bool simd, bool tra
       // place) and lets the level's rows go four links to a register: in the cloth's array a
       // level's particles lie 2^k apart, and scattered links go one at a time at twice the cost.
       const int count = static_cast<int>(level.particles.size());
-      double* packed = level.compact_position.data();
+      const PositionColumns packed = level.compact_position.columns();
       for (int q = 0; q < count; ++q) {
         const Vec3& x = p.position[level.particles[q]];
-        packed[3 * q] = x[0];
-        packed[3 * q + 1] = x[1];
-        packed[3 * q + 2] = x[2];
+        packed.x[q] = x[0];
+        packed.y[q] = x[1];
+        packed.z[q] = x[2];
       }
       StretchProjection how;
       how.unilateral = true;
@@ -189,7 +189,7 @@ double CoarseLevels::project(Particles& p, bool interpolate, bool simd, bool tra
                                                             how, packed, nullptr)
                                             .max_change);
       for (int q = 0; q < count; ++q) {
-        p.position[level.particles[q]] = Vec3(packed[3 * q], packed[3 * q + 1], packed[3 * q + 2]);
+        p.position[level.particles[q]] = Vec3(packed.x[q], packed.y[q], packed.z[q]);
       }
       continue;
     }

@@ -95,6 +95,7 @@ void Solver::prepare(const Particles& particles, const ClothTopology& topology) 
   const bool grid = topology.rows > 0 && !topology.from_mesh;
   stretch_links_.assign(topology.stretch, n, grid ? topology.rows : 0, grid ? topology.cols : 0);
   link_lambda_.assign(topology.stretch.size(), 0.0);
+  link_positions_.resize(stretch_links_.size() > 0 ? n : 0);
   splitTasks();
   bend_lambda_.assign(topology.bend.size(), Vec3::Zero());
   flat_hinges_.assign(topology.bend_rest.empty() ? topology.bend.size() : 0, FlatHinge());
@@ -361,7 +362,14 @@ double Solver::projectStretch(double h, Particles& p, const ClothTopology& topol
     how.simd = config_.simd;
     how.track_change = tracksLargestChange();
     how.lambda_from_zero = first_pass;
+    // The sweep works on the positions in columns (stretch_links.h, PositionColumns): copied in
+    // and back out around it, which costs a small part of what the columns save the sweep.
     double* x = p.position.front().data();
+    const PositionColumns columns = link_positions_.columns();
+    const bool simd = config_.simd;
+    pool_.runRanges(p.size(), [&](int begin, int end, int) {
+      positionsToColumns(x, begin, end, columns, simd);
+    });
     StretchPassResult result;
     const int threads = pool_.threads();
     for (int phase = 0; phase < stretch_links_.phaseCount(); ++phase) {
@@ -369,11 +377,14 @@ double Solver::projectStretch(double h, Particles& p, const ClothTopology& topol
       auto job = [&](int t) {
         thread_results_[t] = projectStretchLinks(
             stretch_links_, stretch_links_.task_batch[range[t]],
-            stretch_links_.task_batch[range[t + 1]], how, x, link_lambda_.data());
+            stretch_links_.task_batch[range[t + 1]], how, columns, link_lambda_.data());
       };
       pool_.run(job);
       for (int t = 0; t < threads; ++t) result.merge(thread_results_[t]);
     }
+    pool_.runRanges(p.size(), [&](int begin, int end, int) {
+      positionsFromColumns(columns, begin, end, x, simd);
+    });
     if (result.degenerate > 0) {
       if (degenerate_in_pass_ == 0) {
         first_degenerate_in_pass_ = stretch_links_.original[result.first_degenerate];

@@ -22,8 +22,8 @@ constexpr double kMinInverseMass = 1e-300;
 // agree to the bit): d = x_i - x_j, C = |d| - l0 (or max(0, C)), dlambda = (-k C - alpha~ lambda)
 // / (w_i + w_j + alpha~) (XPBD eq. 18, the division done once per step in prepareStep), and each
 // end moves by its inverse mass times dlambda along the unit gradient n = d / |d|.
-inline void projectOne(int c, const StretchLinks& links, const StretchProjection& how, double* x,
-                       double* lambda, StretchPassResult& result) {
+inline void projectOne(int c, const StretchLinks& links, const StretchProjection& how,
+                       PositionColumns x, double* lambda, StretchPassResult& result) {
   const double inverse_denominator = links.inverse_denominator[c];
   // A link skipped this pass keeps its multiplier: zero at a substep's first pass.
   const bool clear = how.lambda_from_zero && lambda != nullptr;
@@ -31,9 +31,8 @@ inline void projectOne(int c, const StretchLinks& links, const StretchProjection
     if (clear) lambda[c] = 0.0;
     return;
   }
-  double* xa = x + 3 * links.i[c];
-  double* xb = x + 3 * links.j[c];
-  const double dx = xa[0] - xb[0], dy = xa[1] - xb[1], dz = xa[2] - xb[2];
+  const int a = links.i[c], b = links.j[c];
+  const double dx = x.x[a] - x.x[b], dy = x.y[a] - x.y[b], dz = x.z[a] - x.z[b];
   const double length = std::sqrt((dx * dx + dy * dy) + dz * dz);
   if (length < kMinLength) {
     // No direction to push along: skipped this pass (the other links pull them apart), counted.
@@ -50,19 +49,19 @@ inline void projectOne(int c, const StretchLinks& links, const StretchProjection
   const double s = dlambda / length;
   const double wi = links.inverse_mass_i[c], wj = links.inverse_mass_j[c];
   const double fa = wi * s, fb = wj * s;
-  xa[0] += fa * dx;
-  xa[1] += fa * dy;
-  xa[2] += fa * dz;
-  xb[0] -= fb * dx;
-  xb[1] -= fb * dy;
-  xb[2] -= fb * dz;
+  x.x[a] += fa * dx;
+  x.y[a] += fa * dy;
+  x.z[a] += fa * dz;
+  x.x[b] -= fb * dx;
+  x.y[b] -= fb * dy;
+  x.z[b] -= fb * dz;
   if (how.track_change) {
     result.max_change = std::max(result.max_change, std::abs(dlambda) * std::max(wi, wj));
   }
 }
 
 void projectPortable(const StretchLinks& links, int first_batch, int end_batch,
-                     const StretchProjection& how, double* x, double* lambda,
+                     const StretchProjection& how, PositionColumns x, double* lambda,
                      StretchPassResult& result) {
   const int begin = links.batch_begin[first_batch], end = links.batch_begin[end_batch];
   for (int c = begin; c < end; ++c) projectOne(c, links, how, x, lambda, result);
@@ -71,9 +70,10 @@ void projectPortable(const StretchLinks& links, int first_batch, int end_batch,
 #ifdef PBD_CLOTH_HAVE_AVX2_PATH
 #define PBD_AVX2 __attribute__((target("avx2")))
 
-// Four particles' coordinates (12 doubles from p, x0 y0 z0 x1 y1 ...) as three registers x, y, z
-// (three loads and six shuffles), and back.
-PBD_AVX2 inline void loadFour(const double* p, __m256d& x, __m256d& y, __m256d& z) {
+// Four particles' coordinates as stored in a Vec3Array (12 doubles from p, x0 y0 z0 x1 y1 ...)
+// as three registers x, y, z (three loads and six shuffles), and back: the copies into and out of
+// the columns the projection works on.
+PBD_AVX2 inline void loadInterleavedFour(const double* p, __m256d& x, __m256d& y, __m256d& z) {
   const __m256d a = _mm256_loadu_pd(p);      // x0 y0 z0 x1
   const __m256d b = _mm256_loadu_pd(p + 4);  // y1 z1 x2 y2
   const __m256d c = _mm256_loadu_pd(p + 8);  // z2 x3 y3 z3
@@ -85,13 +85,55 @@ PBD_AVX2 inline void loadFour(const double* p, __m256d& x, __m256d& y, __m256d& 
   z = _mm256_shuffle_pd(z0x1z2x3, y1z1y3z3, 0xA);
 }
 
-PBD_AVX2 inline void storeFour(double* p, __m256d x, __m256d y, __m256d z) {
+PBD_AVX2 inline void storeInterleavedFour(double* p, __m256d x, __m256d y, __m256d z) {
   const __m256d x0y0x2y2 = _mm256_shuffle_pd(x, y, 0x0);
   const __m256d z0x1z2x3 = _mm256_shuffle_pd(z, x, 0xA);
   const __m256d y1z1y3z3 = _mm256_shuffle_pd(y, z, 0xF);
   _mm256_storeu_pd(p, _mm256_permute2f128_pd(x0y0x2y2, z0x1z2x3, 0x20));
   _mm256_storeu_pd(p + 4, _mm256_blend_pd(y1z1y3z3, x0y0x2y2, 0xC));
   _mm256_storeu_pd(p + 8, _mm256_permute2f128_pd(z0x1z2x3, y1z1y3z3, 0x31));
+}
+
+PBD_AVX2 void toColumnsAvx2(const double* interleaved, int begin, int end, PositionColumns to) {
+  int p = begin;
+  for (; p + 4 <= end; p += 4) {
+    __m256d x, y, z;
+    loadInterleavedFour(interleaved + 3 * p, x, y, z);
+    _mm256_storeu_pd(to.x + p, x);
+    _mm256_storeu_pd(to.y + p, y);
+    _mm256_storeu_pd(to.z + p, z);
+  }
+  for (; p < end; ++p) {
+    to.x[p] = interleaved[3 * p];
+    to.y[p] = interleaved[3 * p + 1];
+    to.z[p] = interleaved[3 * p + 2];
+  }
+}
+
+PBD_AVX2 void fromColumnsAvx2(PositionColumns from, int begin, int end, double* interleaved) {
+  int p = begin;
+  for (; p + 4 <= end; p += 4) {
+    storeInterleavedFour(interleaved + 3 * p, _mm256_loadu_pd(from.x + p),
+                         _mm256_loadu_pd(from.y + p), _mm256_loadu_pd(from.z + p));
+  }
+  for (; p < end; ++p) {
+    interleaved[3 * p] = from.x[p];
+    interleaved[3 * p + 1] = from.y[p];
+    interleaved[3 * p + 2] = from.z[p];
+  }
+}
+
+// Four consecutive particles from p, one register per coordinate: three plain loads, no shuffle.
+PBD_AVX2 inline void loadFour(PositionColumns x, int p, __m256d* r) {
+  r[0] = _mm256_loadu_pd(x.x + p);
+  r[1] = _mm256_loadu_pd(x.y + p);
+  r[2] = _mm256_loadu_pd(x.z + p);
+}
+
+PBD_AVX2 inline void storeFour(PositionColumns x, int p, const __m256d* r) {
+  _mm256_storeu_pd(x.x + p, r[0]);
+  _mm256_storeu_pd(x.y + p, r[1]);
+  _mm256_storeu_pd(x.z + p, r[2]);
 }
 
 // One coordinate of eight consecutive particles (two registers of four) split into the even ones
@@ -108,24 +150,28 @@ PBD_AVX2 inline void joinEvenOdd(__m256d even, __m256d odd, __m256d& low, __m256
   high = _mm256_permute2f128_pd(e0o0e2o2, e1o1e3o3, 0x31);
 }
 
-// Eight particles from p: the even ones and the odd ones, as x, y, z registers each.
+// Eight consecutive particles from p: the even ones and the odd ones, as x, y, z registers each.
 struct EightParticles {
   __m256d even[3];
   __m256d odd[3];
 };
 
-PBD_AVX2 inline void loadEight(const double* p, EightParticles& e) {
-  __m256d low[3], high[3];
-  loadFour(p, low[0], low[1], low[2]);
-  loadFour(p + 12, high[0], high[1], high[2]);
-  for (int d = 0; d < 3; ++d) splitEvenOdd(low[d], high[d], e.even[d], e.odd[d]);
+PBD_AVX2 inline void loadEight(PositionColumns x, int p, EightParticles& e) {
+  const double* column[3] = {x.x, x.y, x.z};
+  for (int d = 0; d < 3; ++d) {
+    splitEvenOdd(_mm256_loadu_pd(column[d] + p), _mm256_loadu_pd(column[d] + p + 4), e.even[d],
+                 e.odd[d]);
+  }
 }
 
-PBD_AVX2 inline void storeEight(double* p, const EightParticles& e) {
-  __m256d low[3], high[3];
-  for (int d = 0; d < 3; ++d) joinEvenOdd(e.even[d], e.odd[d], low[d], high[d]);
-  storeFour(p, low[0], low[1], low[2]);
-  storeFour(p + 12, high[0], high[1], high[2]);
+PBD_AVX2 inline void storeEight(PositionColumns x, int p, const EightParticles& e) {
+  double* column[3] = {x.x, x.y, x.z};
+  for (int d = 0; d < 3; ++d) {
+    __m256d low, high;
+    joinEvenOdd(e.even[d], e.odd[d], low, high);
+    _mm256_storeu_pd(column[d] + p, low);
+    _mm256_storeu_pd(column[d] + p + 4, high);
+  }
 }
 
 // The arithmetic of projectOne on four links at once: a = their i ends, b = their j ends (x, y,
@@ -168,15 +214,14 @@ PBD_AVX2 inline bool projectFour(int c, const StretchLinks& links, const Stretch
 }
 
 PBD_AVX2 void projectAvx2(const StretchLinks& links, int first_batch, int end_batch,
-                          const StretchProjection& how, double* x, double* lambda,
+                          const StretchProjection& how, PositionColumns x, double* lambda,
                           StretchPassResult& result) {
   __m256d max_change = _mm256_setzero_pd();
   const int first = links.batch_segment[first_batch], last = links.batch_segment[end_batch];
   for (int g = first; g < last; ++g) {
     const StretchLinks::Segment& segment = links.segments[g];
     const int c = segment.begin;
-    double* pa = x + 3 * links.i[c];
-    double* pb = x + 3 * links.j[c];
+    const int pa = links.i[c], pb = links.j[c];
     bool done = true;
     switch (segment.layout) {
       case StretchLinks::Layout::kScalar:
@@ -186,45 +231,45 @@ PBD_AVX2 void projectAvx2(const StretchLinks& links, int first_batch, int end_ba
         break;
       case StretchLinks::Layout::kContiguous: {
         __m256d a[3], b[3];
-        loadFour(pa, a[0], a[1], a[2]);
-        loadFour(pb, b[0], b[1], b[2]);
+        loadFour(x, pa, a);
+        loadFour(x, pb, b);
         done = projectFour(c, links, how, lambda, a, b, max_change);
         if (done) {
-          storeFour(pa, a[0], a[1], a[2]);
-          storeFour(pb, b[0], b[1], b[2]);
+          storeFour(x, pa, a);
+          storeFour(x, pb, b);
         }
         break;
       }
       case StretchLinks::Layout::kCrossed: {
         // j ends m+1, m, m+3, m+2: four from m, swapped within each pair (lane order 1 0 3 2).
-        double* pm = x + 3 * links.j[c + 1];
+        const int pm = links.j[c + 1];
         __m256d a[3], b[3];
-        loadFour(pa, a[0], a[1], a[2]);
-        loadFour(pm, b[0], b[1], b[2]);
+        loadFour(x, pa, a);
+        loadFour(x, pm, b);
         for (int d = 0; d < 3; ++d) b[d] = _mm256_permute_pd(b[d], 0x5);
         done = projectFour(c, links, how, lambda, a, b, max_change);
         if (done) {
           for (int d = 0; d < 3; ++d) b[d] = _mm256_permute_pd(b[d], 0x5);
-          storeFour(pa, a[0], a[1], a[2]);
-          storeFour(pm, b[0], b[1], b[2]);
+          storeFour(x, pa, a);
+          storeFour(x, pm, b);
         }
         break;
       }
       case StretchLinks::Layout::kInterleaved: {
         EightParticles e;
-        loadEight(pa, e);
+        loadEight(x, pa, e);
         done = projectFour(c, links, how, lambda, e.even, e.odd, max_change);
-        if (done) storeEight(pa, e);
+        if (done) storeEight(x, pa, e);
         break;
       }
       case StretchLinks::Layout::kStrided: {
         EightParticles ea, eb;
-        loadEight(pa, ea);
-        loadEight(pb, eb);
+        loadEight(x, pa, ea);
+        loadEight(x, pb, eb);
         done = projectFour(c, links, how, lambda, ea.even, eb.even, max_change);
         if (done) {
-          storeEight(pa, ea);
-          storeEight(pb, eb);
+          storeEight(x, pa, ea);
+          storeEight(x, pb, eb);
         }
         break;
       }
@@ -436,7 +481,7 @@ bool stretchLinksUseAvx2() {
 }
 
 StretchPassResult projectStretchLinks(const StretchLinks& links, int first_batch, int end_batch,
-                                      const StretchProjection& how, double* position,
+                                      const StretchProjection& how, PositionColumns position,
                                       double* lambda) {
   StretchPassResult result;
   if (first_batch >= end_batch) return result;
@@ -448,6 +493,46 @@ StretchPassResult projectStretchLinks(const StretchLinks& links, int first_batch
 #endif
   projectPortable(links, first_batch, end_batch, how, position, lambda, result);
   return result;
+}
+
+void positionsToColumns(const double* interleaved, int begin, int end, PositionColumns columns,
+                        bool simd) {
+#ifdef PBD_CLOTH_HAVE_AVX2_PATH
+  if (simd && stretchLinksUseAvx2()) {
+    toColumnsAvx2(interleaved, begin, end, columns);
+    return;
+  }
+#endif
+  for (int p = begin; p < end; ++p) {
+    columns.x[p] = interleaved[3 * p];
+    columns.y[p] = interleaved[3 * p + 1];
+    columns.z[p] = interleaved[3 * p + 2];
+  }
+}
+
+void positionsFromColumns(PositionColumns columns, int begin, int end, double* interleaved,
+                          bool simd) {
+#ifdef PBD_CLOTH_HAVE_AVX2_PATH
+  if (simd && stretchLinksUseAvx2()) {
+    fromColumnsAvx2(columns, begin, end, interleaved);
+    return;
+  }
+#endif
+  for (int p = begin; p < end; ++p) {
+    interleaved[3 * p] = columns.x[p];
+    interleaved[3 * p + 1] = columns.y[p];
+    interleaved[3 * p + 2] = columns.z[p];
+  }
+}
+
+void ColumnPositions::resize(int count) {
+  count_ = count;
+  storage_.assign(3 * static_cast<std::size_t>(std::max(count, 0)), 0.0);
+}
+
+PositionColumns ColumnPositions::columns() {
+  double* base = storage_.data();
+  return {base, base + count_, base + 2 * static_cast<std::size_t>(count_)};
 }
 
 }  // namespace pbd_cloth

@@ -148,13 +148,15 @@ struct StretchRig {
     SolverRig rig(scene);
     for (int step = 0; step < 30; ++step) rig.timedStep();  // a swinging, stretched state
     links.assign(rig.topology.stretch, rig.particles.size());
-    position = rig.particles.position;
+    position.resize(rig.particles.size());
+    positionsToColumns(rig.particles.position.front().data(), 0, rig.particles.size(),
+                       position.columns(), false);
     inverse_mass = rig.particles.inverse_mass;
     lambda.assign(links.size(), 0.0);
   }
-  double* x() { return position.front().data(); }
+  PositionColumns x() { return position.columns(); }
   StretchLinks links;
-  Vec3Array position;
+  ColumnPositions position;  // in columns, as the solver's sweep has them
   std::vector<double> inverse_mass;
   std::vector<double> lambda;
 };
@@ -192,25 +194,26 @@ void BM_StretchBareLoop(benchmark::State& state) {
   const double* wj = rig.links.inverse_mass_j.data();
   const double* inverse_denominator = rig.links.inverse_denominator.data();
   double* lambda = rig.lambda.data();
-  double* x = rig.x();
+  double* x = rig.x().x;
+  double* y = rig.x().y;
+  double* z = rig.x().z;
   double total = 0.0;
   for (auto _ : state) {
     const Clock::time_point start = Clock::now();
     for (int c = 0; c < count; ++c) {
-      double* xa = x + 3 * link_i[c];
-      double* xb = x + 3 * link_j[c];
-      const double dx = xa[0] - xb[0], dy = xa[1] - xb[1], dz = xa[2] - xb[2];
+      const int a = link_i[c], b = link_j[c];
+      const double dx = x[a] - x[b], dy = y[a] - y[b], dz = z[a] - z[b];
       const double length = std::sqrt((dx * dx + dy * dy) + dz * dz);
       const double dlambda = (-(length - rest[c]) - alpha * lambda[c]) * inverse_denominator[c];
       lambda[c] += dlambda;
       const double s = dlambda / length;
       const double fa = wi[c] * s, fb = wj[c] * s;
-      xa[0] += fa * dx;
-      xa[1] += fa * dy;
-      xa[2] += fa * dz;
-      xb[0] -= fb * dx;
-      xb[1] -= fb * dy;
-      xb[2] -= fb * dz;
+      x[a] += fa * dx;
+      y[a] += fa * dy;
+      z[a] += fa * dz;
+      x[b] -= fb * dx;
+      y[b] -= fb * dy;
+      z[b] -= fb * dz;
     }
     benchmark::ClobberMemory();
     total += secondsSince(start);
@@ -233,8 +236,10 @@ struct DirectRig {
     const int count = links.size();
     direction.resize(count);
     at.resize(stretch.position.size());
+    const PositionColumns x = stretch.x();
+    auto at_particle = [&x](int q) { return Vec3(x.x[q], x.y[q], x.z[q]); };
     for (int k = 0; k < count; ++k) {
-      direction[k] = (stretch.position[links.i[k]] - stretch.position[links.j[k]]).normalized();
+      direction[k] = (at_particle(links.i[k]) - at_particle(links.j[k])).normalized();
       at[links.i[k]].push_back({k, 1.0});
       at[links.j[k]].push_back({k, -1.0});
     }

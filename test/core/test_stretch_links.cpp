@@ -30,6 +30,19 @@ SceneConfig swingingScene(int diagonals) {
   return scene;
 }
 
+// One projection of batches [first, end) on positions kept as a Vec3Array: into columns, the
+// projection, and back (what Solver::projectStretch does around its sweep).
+StretchPassResult projectOn(const StretchLinks& links, int first, int end,
+                            const StretchProjection& how, Vec3Array& x, double* lambda) {
+  ColumnPositions columns;
+  columns.resize(static_cast<int>(x.size()));
+  positionsToColumns(x.front().data(), 0, columns.size(), columns.columns(), how.simd);
+  const StretchPassResult result =
+      projectStretchLinks(links, first, end, how, columns.columns(), lambda);
+  positionsFromColumns(columns.columns(), 0, columns.size(), x.front().data(), how.simd);
+  return result;
+}
+
 StretchLinks linksOf(const SceneConfig& scene) {
   Particles particles;
   ClothTopology topology;
@@ -128,8 +141,7 @@ TEST(StretchLinks, CoincidentEndsInsideARegisterGroupAreReportedByIndex) {
     std::vector<double> lambda(4, 0.0);
     StretchProjection how;
     how.simd = simd;
-    const StretchPassResult result =
-        projectStretchLinks(links, 0, links.batchCount(), how, x.front().data(), lambda.data());
+    const StretchPassResult result = projectOn(links, 0, links.batchCount(), how, x, lambda.data());
     EXPECT_EQ(result.degenerate, 1);
     EXPECT_EQ(result.first_degenerate, 2);
     EXPECT_EQ(lambda[2], 0.0);
@@ -170,12 +182,41 @@ TEST(StretchLinks, CrossedDiagonalsLoadAsWholeRegisters) {
     std::vector<double> lambda(list.size(), 0.0);
     StretchProjection how;
     how.simd = simd;
-    projectStretchLinks(links, 0, 1, how, result[simd].front().data(), lambda.data());
+    projectOn(links, 0, 1, how, result[simd], lambda.data());
   }
   EXPECT_EQ(result[0], result[1]);
   EXPECT_EQ(result[1][3], start[3]);
   for (const DistanceConstraint& link : list) {
     EXPECT_NEAR((result[1][link.i] - result[1][link.j]).norm(), link.rest_length, 1e-12);
+  }
+}
+
+// The copies into and out of columns move every coordinate of [begin, end) exactly, on both paths,
+// with the four-at-a-time part and the tail (11 particles from 1 to 10: two groups of four and a
+// tail of one), and touch nothing outside the range.
+TEST(StretchLinks, ColumnsCopyExactlyTheirRange) {
+  for (bool simd : {true, false}) {
+    Vec3Array x(11);
+    for (int k = 0; k < 11; ++k) x[k] = Vec3(0.1 * k + 1e-13, -3.7 * k, std::sqrt(2.0 + k));
+    ColumnPositions columns;
+    columns.resize(11);
+    const PositionColumns c = columns.columns();
+    for (int k = 0; k < 11; ++k) c.x[k] = c.y[k] = c.z[k] = -1.0;
+    positionsToColumns(x.front().data(), 1, 10, c, simd);
+    for (int k = 0; k < 11; ++k) {
+      const bool inside = k >= 1 && k < 10;
+      EXPECT_EQ(c.x[k], inside ? x[k][0] : -1.0) << "particle " << k << ", simd " << simd;
+      EXPECT_EQ(c.y[k], inside ? x[k][1] : -1.0) << "particle " << k << ", simd " << simd;
+      EXPECT_EQ(c.z[k], inside ? x[k][2] : -1.0) << "particle " << k << ", simd " << simd;
+    }
+    Vec3Array back(11, Vec3::Constant(5.0));
+    for (int k = 1; k < 10; ++k) c.y[k] += 1.0;  // so the copy back is seen to carry a change
+    positionsFromColumns(c, 1, 10, back.front().data(), simd);
+    for (int k = 0; k < 11; ++k) {
+      const bool inside = k >= 1 && k < 10;
+      EXPECT_EQ(back[k], inside ? Vec3(x[k][0], x[k][1] + 1.0, x[k][2]) : Vec3::Constant(5.0))
+          << "particle " << k << ", simd " << simd;
+    }
   }
 }
 
@@ -188,8 +229,7 @@ TEST(StretchLinks, LinksWithoutAFreeEndAreSkipped) {
   StretchLinks links;
   links.assign(list, 2);
   links.prepareStep(inverse_mass.data(), 1e-3);
-  const StretchPassResult result =
-      projectStretchLinks(links, 0, 1, StretchProjection{}, x.front().data(), lambda.data());
+  const StretchPassResult result = projectOn(links, 0, 1, StretchProjection{}, x, lambda.data());
   EXPECT_EQ(x, before);
   EXPECT_EQ(lambda[0], 0.0);
   EXPECT_EQ(result.degenerate, 0);
@@ -222,10 +262,9 @@ TEST(StretchLinks, FirstPassWritesTheMultipliersFromZero) {
     how.alpha = 0.5;
     Vec3Array cleared_x = x, stale_x = x;
     std::vector<double> cleared(list.size(), 0.0), stale(list.size(), 7.0);
-    projectStretchLinks(links, 0, links.batchCount(), how, cleared_x.front().data(),
-                        cleared.data());
+    projectOn(links, 0, links.batchCount(), how, cleared_x, cleared.data());
     how.lambda_from_zero = true;
-    projectStretchLinks(links, 0, links.batchCount(), how, stale_x.front().data(), stale.data());
+    projectOn(links, 0, links.batchCount(), how, stale_x, stale.data());
     EXPECT_EQ(stale_x, cleared_x) << "simd " << simd;
     EXPECT_EQ(stale, cleared) << "simd " << simd;
     EXPECT_NE(cleared[0], 0.0);  // the links did act
@@ -233,7 +272,7 @@ TEST(StretchLinks, FirstPassWritesTheMultipliersFromZero) {
     how.lambda_from_zero = false;
     std::vector<double> read(list.size(), 7.0);
     Vec3Array read_x = x;
-    projectStretchLinks(links, 0, links.batchCount(), how, read_x.front().data(), read.data());
+    projectOn(links, 0, links.batchCount(), how, read_x, read.data());
     EXPECT_NE(read_x, cleared_x);
   }
 }
