@@ -363,13 +363,12 @@ double Solver::projectStretch(double h, Particles& p, const ClothTopology& topol
     how.track_change = tracksLargestChange();
     how.lambda_from_zero = first_pass;
     // The sweep works on the positions in columns (stretch_links.h, PositionColumns): copied in
-    // and back out around it, which costs a small part of what the columns save the sweep.
+    // and back out around it, which costs a small part of what the columns save the sweep. The
+    // copies run on this thread: with solver.threads 2 one more meeting of the threads for each
+    // cost more than the half copy it saved (doc/performance.md, "Positions in columns").
     double* x = p.position.front().data();
     const PositionColumns columns = link_positions_.columns();
-    const bool simd = config_.simd;
-    pool_.runRanges(p.size(), [&](int begin, int end, int) {
-      positionsToColumns(x, begin, end, columns, simd);
-    });
+    positionsToColumns(x, 0, p.size(), columns, config_.simd);
     StretchPassResult result;
     const int threads = pool_.threads();
     for (int phase = 0; phase < stretch_links_.phaseCount(); ++phase) {
@@ -382,9 +381,7 @@ double Solver::projectStretch(double h, Particles& p, const ClothTopology& topol
       pool_.run(job);
       for (int t = 0; t < threads; ++t) result.merge(thread_results_[t]);
     }
-    pool_.runRanges(p.size(), [&](int begin, int end, int) {
-      positionsFromColumns(columns, begin, end, x, simd);
-    });
+    positionsFromColumns(columns, 0, p.size(), x, config_.simd);
     if (result.degenerate > 0) {
       if (degenerate_in_pass_ == 0) {
         first_degenerate_in_pass_ = stretch_links_.original[result.first_degenerate];
