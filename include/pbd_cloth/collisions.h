@@ -231,8 +231,18 @@ class Collisions {
   std::vector<Frame> frame_end_;
   Vec3Array obstacle_lo_;  // world bounds of each obstacle over the substep (begin and end poses)
   Vec3Array obstacle_hi_;
-  std::vector<ContactState> obstacle_contacts_;  // [particle * obstacles + obstacle]
-  std::vector<double> obstacle_allowance_;       // same layout: allowanceFor, this step
+  // Each (particle, obstacle) pair's state, obstacle by obstacle: slot obstacle * particles +
+  // particle (slotOf), so that the particles near one obstacle, neighbours in the cloth, share
+  // cache lines and pages. Particle by particle, a cloth of 16384 particles over 18 obstacles
+  // (33 MB of states) had each particle's slots 2 KB after the last one's.
+  std::size_t slotOf(int particle, std::size_t obstacle) const {
+    return obstacle * static_cast<std::size_t>(slot_particles_) +
+           static_cast<std::size_t>(particle);
+  }
+  int slot_particles_ = 0;
+  std::vector<ContactState> obstacle_contacts_;
+  std::vector<double> obstacle_allowance_;  // same layout: allowanceFor, this step
+  std::vector<char> has_allowance_;         // per particle: a slot of obstacle_allowance_ not zero
   std::vector<int> mesh_hint_;  // same layout: last closest triangle (mesh shapes' search hint)
   // Same layout, mesh shapes: the last distance computed and where (local frame), a free lower
   // bound on the next one.

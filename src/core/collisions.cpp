@@ -151,7 +151,9 @@ void Collisions::setObstacleEnabled(int obstacle, bool enabled) {
 
 void Collisions::prepare(const Particles& particles, const ClothTopology& topology) {
   const int n = particles.size();
+  slot_particles_ = n;
   obstacle_contacts_.assign(static_cast<std::size_t>(n) * obstacles_.size(), ContactState());
+  has_allowance_.assign(n, 0);
   obstacle_allowance_.assign(obstacle_contacts_.size(), 0.0);
   mesh_hint_.assign(obstacle_contacts_.size(), -1);
   mesh_distance_.assign(obstacle_contacts_.size(), -std::numeric_limits<double>::infinity());
@@ -411,27 +413,67 @@ void Collisions::preStabilizeObstacles(Particles& p, double max_shift) {
   for (std::size_t k = 0; k < count; ++k) {
     worldBounds(shapes_[k], frame_end_[k], obstacle_lo_[k], obstacle_hi_[k]);
   }
+  // Last step's allowances back to zero: only the particles that had one have any to clear, so
+  // a step does not write every particle's slot of every obstacle.
   for (int i = 0; i < p.size(); ++i) {
-    if (p.inverse_mass[i] == 0.0) continue;
+    if (!has_allowance_[i]) continue;
+    for (std::size_t k = 0; k < count; ++k) obstacle_allowance_[slotOf(i, k)] = 0.0;
+    has_allowance_[i] = 0;
+  }
+  if (count == 0) return;
+  // Blocks of kCullBlock particles culled as in the first pass (projectBlockFirstPass): an
+  // obstacle apart from the box of the block's spheres is apart from each sphere (the same
+  // arithmetic as outsideBounds), so each particle meets only its block's list `near`, in
+  // order, until a shift moves it: from there on every later obstacle, as a loop over all of
+  // them would. The same shifts and allowances as testing every pair, at a cost that grows with
+  // the particles near each obstacle, not with particles times obstacles.
+  const double inf = std::numeric_limits<double>::infinity();
+  int* near = near_obstacles_.data();
+  for (int block = 0; block < p.size(); block += kCullBlock) {
+    const int block_end = std::min(p.size(), block + kCullBlock);
+    Eigen::Array3d lo = Eigen::Array3d::Constant(inf), hi = Eigen::Array3d::Constant(-inf);
+    bool every = false;
+    for (int i = block; i < block_end; ++i) {
+      if (p.inverse_mass[i] == 0.0) continue;
+      const Eigen::Array3d sphere_lo = p.position[i].array() - p.radius[i];
+      const Eigen::Array3d sphere_hi = p.position[i].array() + p.radius[i];
+      every = every || !(sphere_lo <= sphere_hi).all();  // not a number: every obstacle
+      lo = lo.min(sphere_lo);
+      hi = hi.max(sphere_hi);
+    }
+    int near_count = 0;
     for (std::size_t k = 0; k < count; ++k) {
-      if (!enabled_[k]) continue;
-      const std::size_t slot = static_cast<std::size_t>(i) * count + k;
-      // Outside the shape's bounds grown by the radius: no overlap to separate (and no query,
-      // which for a mesh is a tree search).
-      if (outsideBounds(p.position[i], p.radius[i], obstacle_lo_[k], obstacle_hi_[k])) {
-        obstacle_allowance_[slot] = 0.0;
-        continue;
+      if (enabled_[k] && (every || !boxesApart(lo, hi, obstacle_lo_[k], obstacle_hi_[k]))) {
+        near[near_count++] = static_cast<int>(k);
       }
-      Vec3 normal;
-      const double clearance =
-          signedDistance(shapes_[k], frame_end_[k].toLocal(p.position[i]), normal) - p.radius[i];
-      double left = 0.0;
-      if (clearance < -kOverlapSlop * p.radius[i]) {
-        const double shift = std::min(-clearance, max_shift);
-        p.position[i] += shift * (frame_end_[k].rotation * normal);
-        left = -clearance - shift;
+    }
+    if (near_count == 0) continue;
+    for (int i = block; i < block_end; ++i) {
+      if (p.inverse_mass[i] == 0.0) continue;
+      int q = 0;
+      bool every_later = false;
+      for (std::size_t k = static_cast<std::size_t>(near[0]); k < count;
+           k = every_later        ? k + 1
+               : ++q < near_count ? static_cast<std::size_t>(near[q])
+                                  : count) {
+        if (!enabled_[k]) continue;
+        // Outside the shape's bounds grown by the radius: no overlap to separate (and no query,
+        // which for a mesh is a tree search); its allowance stays zero.
+        if (outsideBounds(p.position[i], p.radius[i], obstacle_lo_[k], obstacle_hi_[k])) continue;
+        Vec3 normal;
+        const double clearance =
+            signedDistance(shapes_[k], frame_end_[k].toLocal(p.position[i]), normal) - p.radius[i];
+        double left = 0.0;
+        if (clearance < -kOverlapSlop * p.radius[i]) {
+          const double shift = std::min(-clearance, max_shift);
+          p.position[i] += shift * (frame_end_[k].rotation * normal);
+          left = -clearance - shift;
+          every_later = true;
+        }
+        const double allowance = allowanceFor(left, p.radius[i], kOverlapSlop);
+        obstacle_allowance_[slotOf(i, k)] = allowance;
+        if (allowance > 0.0) has_allowance_[i] = 1;
       }
-      obstacle_allowance_[slot] = allowanceFor(left, p.radius[i], kOverlapSlop);
     }
   }
 }
@@ -560,7 +602,7 @@ double Collisions::projectObstaclesOn(Particles& p, int i, bool first_pass, cons
                                              : count;
   for (std::size_t k = first; k < count; k = next(k)) {
     if (!enabled_[k]) continue;
-    const std::size_t slot = static_cast<std::size_t>(i) * count + k;
+    const std::size_t slot = slotOf(i, k);
     // Cheap cull: a particle whose path of this substep (the segment from its start, in the box
     // of its ends grown by its radius) stays out of the obstacle's bounds cannot touch it, unless
     // it was pushed out earlier in this substep (never so in its first pass).
@@ -667,15 +709,19 @@ void Collisions::getMeshContacts(std::vector<MeshContactCache>& caches) const {
   caches.clear();
   const std::size_t count = obstacles_.size();
   const double never = -std::numeric_limits<double>::infinity();
-  for (std::size_t slot = 0; slot < mesh_hint_.size(); ++slot) {
-    if (mesh_hint_[slot] == -1 && mesh_distance_[slot] == never) continue;  // never queried
-    MeshContactCache cache;
-    cache.particle = static_cast<int>(slot / count);
-    cache.collider = static_cast<int>(slot % count);
-    cache.triangle = mesh_hint_[slot];
-    cache.distance = mesh_distance_[slot];
-    cache.point = mesh_point_[slot];
-    caches.push_back(cache);
+  // Particle by particle, each one's colliders in order (the slots lie obstacle by obstacle).
+  for (int i = 0; i < slot_particles_; ++i) {
+    for (std::size_t k = 0; k < count; ++k) {
+      const std::size_t slot = slotOf(i, k);
+      if (mesh_hint_[slot] == -1 && mesh_distance_[slot] == never) continue;  // never queried
+      MeshContactCache cache;
+      cache.particle = i;
+      cache.collider = static_cast<int>(k);
+      cache.triangle = mesh_hint_[slot];
+      cache.distance = mesh_distance_[slot];
+      cache.point = mesh_point_[slot];
+      caches.push_back(cache);
+    }
   }
 }
 
@@ -684,8 +730,7 @@ void Collisions::setMeshContacts(const std::vector<MeshContactCache>& caches) {
   std::fill(mesh_distance_.begin(), mesh_distance_.end(), -std::numeric_limits<double>::infinity());
   std::fill(mesh_point_.begin(), mesh_point_.end(), Vec3::Zero());
   for (const MeshContactCache& cache : caches) {
-    const std::size_t slot =
-        static_cast<std::size_t>(cache.particle) * obstacles_.size() + cache.collider;
+    const std::size_t slot = slotOf(cache.particle, static_cast<std::size_t>(cache.collider));
     mesh_hint_[slot] = cache.triangle;
     mesh_distance_[slot] = cache.distance;
     mesh_point_[slot] = cache.point;
