@@ -198,6 +198,8 @@ class Collisions {
   // most kCullBlock of them, culled by their paths' boxes (`near`: room for the obstacles'
   // list); returns the largest correction.
   double projectBlockFirstPass(Particles& particles, int begin, int end, int* near);
+  int listNearObstacles(const Eigen::Array3d& lo, const Eigen::Array3d& hi, bool every,
+                        int* near) const;
   // The obstacles' contacts of free particle i (first_pass: the substep's first pass): those of
   // `near` (near_count of them, increasing), and after the first contact that moves the particle
   // every later obstacle, since its path may then reach bounds its block's paths kept out of;

@@ -441,12 +441,7 @@ void Collisions::preStabilizeObstacles(Particles& p, double max_shift) {
       lo = lo.min(sphere_lo);
       hi = hi.max(sphere_hi);
     }
-    int near_count = 0;
-    for (std::size_t k = 0; k < count; ++k) {
-      if (enabled_[k] && (every || !boxesApart(lo, hi, obstacle_lo_[k], obstacle_hi_[k]))) {
-        near[near_count++] = static_cast<int>(k);
-      }
-    }
+    const int near_count = listNearObstacles(lo, hi, every, near);
     if (near_count == 0) continue;
     for (int i = block; i < block_end; ++i) {
       if (p.inverse_mass[i] == 0.0) continue;
@@ -516,6 +511,22 @@ double Collisions::projectObstaclesAndBounds(Particles& p, bool first_pass) {
   return *std::max_element(max_change, max_change + threads);
 }
 
+// The enabled obstacles whose bounds the box [lo, hi] reaches, in increasing order, into `near`;
+// every enabled obstacle when the box is not one (`every`: a coordinate not a number). Returns
+// how many. Both culls by blocks use it: the pre-stabilization with the block's spheres, the
+// first pass with its paths.
+int Collisions::listNearObstacles(const Eigen::Array3d& lo, const Eigen::Array3d& hi, bool every,
+                                  int* near) const {
+  int near_count = 0;
+  const int count = static_cast<int>(shapes_.size());
+  for (int k = 0; k < count; ++k) {
+    if (enabled_[k] && (every || !boxesApart(lo, hi, obstacle_lo_[k], obstacle_hi_[k]))) {
+      near[near_count++] = k;
+    }
+  }
+  return near_count;
+}
+
 // The first pass over the free particles [begin, end): each one's path box (pathBox) once, for
 // three culls in turn, each exact, so that a particle that can touch nothing costs that box and
 // a few comparisons (a cloth falling or lying clear of most obstacles: most of its particles):
@@ -541,13 +552,7 @@ double Collisions::projectBlockFirstPass(Particles& p, int begin, int end, int* 
     lo = lo.min(particle_lo);
     hi = hi.max(particle_hi);
   }
-  int near_count = 0;
-  const int count = static_cast<int>(shapes_.size());
-  for (int k = 0; k < count; ++k) {
-    if (enabled_[k] && (every || !boxesApart(lo, hi, obstacle_lo_[k], obstacle_hi_[k]))) {
-      near[near_count++] = k;
-    }
-  }
+  const int near_count = listNearObstacles(lo, hi, every, near);
   const bool bounds_apply = bounds_.enabled;
   const Eigen::Array3d bounds_min = bounds_.min.array(), bounds_max = bounds_.max.array();
   auto insideBounds = [&](const Eigen::Array3d& a, const Eigen::Array3d& b) {

@@ -94,7 +94,9 @@ PBD_AVX2 inline void storeInterleavedFour(double* p, __m256d x, __m256d y, __m25
   _mm256_storeu_pd(p + 8, _mm256_permute2f128_pd(z0x1z2x3, y1z1y3z3, 0x31));
 }
 
-PBD_AVX2 void toColumnsAvx2(const double* interleaved, int begin, int end, PositionColumns to) {
+// The AVX2 copies move whole groups of four particles and return the first particle they did not
+// copy; the caller's plain loop copies the rest, the same loop as on a CPU without AVX2.
+PBD_AVX2 int toColumnsAvx2(const double* interleaved, int begin, int end, PositionColumns to) {
   int p = begin;
   for (; p + 4 <= end; p += 4) {
     __m256d x, y, z;
@@ -103,24 +105,16 @@ PBD_AVX2 void toColumnsAvx2(const double* interleaved, int begin, int end, Posit
     _mm256_storeu_pd(to.y + p, y);
     _mm256_storeu_pd(to.z + p, z);
   }
-  for (; p < end; ++p) {
-    to.x[p] = interleaved[3 * p];
-    to.y[p] = interleaved[3 * p + 1];
-    to.z[p] = interleaved[3 * p + 2];
-  }
+  return p;
 }
 
-PBD_AVX2 void fromColumnsAvx2(PositionColumns from, int begin, int end, double* interleaved) {
+PBD_AVX2 int fromColumnsAvx2(PositionColumns from, int begin, int end, double* interleaved) {
   int p = begin;
   for (; p + 4 <= end; p += 4) {
     storeInterleavedFour(interleaved + 3 * p, _mm256_loadu_pd(from.x + p),
                          _mm256_loadu_pd(from.y + p), _mm256_loadu_pd(from.z + p));
   }
-  for (; p < end; ++p) {
-    interleaved[3 * p] = from.x[p];
-    interleaved[3 * p + 1] = from.y[p];
-    interleaved[3 * p + 2] = from.z[p];
-  }
+  return p;
 }
 
 // Four consecutive particles from p, one register per coordinate: three plain loads, no shuffle.
@@ -497,13 +491,11 @@ StretchPassResult projectStretchLinks(const StretchLinks& links, int first_batch
 
 void positionsToColumns(const double* interleaved, int begin, int end, PositionColumns columns,
                         bool simd) {
+  int p = begin;
 #ifdef PBD_CLOTH_HAVE_AVX2_PATH
-  if (simd && stretchLinksUseAvx2()) {
-    toColumnsAvx2(interleaved, begin, end, columns);
-    return;
-  }
+  if (simd && stretchLinksUseAvx2()) p = toColumnsAvx2(interleaved, begin, end, columns);
 #endif
-  for (int p = begin; p < end; ++p) {
+  for (; p < end; ++p) {
     columns.x[p] = interleaved[3 * p];
     columns.y[p] = interleaved[3 * p + 1];
     columns.z[p] = interleaved[3 * p + 2];
@@ -512,13 +504,11 @@ void positionsToColumns(const double* interleaved, int begin, int end, PositionC
 
 void positionsFromColumns(PositionColumns columns, int begin, int end, double* interleaved,
                           bool simd) {
+  int p = begin;
 #ifdef PBD_CLOTH_HAVE_AVX2_PATH
-  if (simd && stretchLinksUseAvx2()) {
-    fromColumnsAvx2(columns, begin, end, interleaved);
-    return;
-  }
+  if (simd && stretchLinksUseAvx2()) p = fromColumnsAvx2(columns, begin, end, interleaved);
 #endif
-  for (int p = begin; p < end; ++p) {
+  for (; p < end; ++p) {
     interleaved[3 * p] = columns.x[p];
     interleaved[3 * p + 1] = columns.y[p];
     interleaved[3 * p + 2] = columns.z[p];
