@@ -269,6 +269,10 @@ def swinging100_runs(quick):
         plan = [('xpbd + levels', levels, substeps_only([40, 60, 80, 120, 140, 160])),
                 ('xpbd + levels, 2 threads', levels + ['solver.threads=2'],
                  substeps_only([60, 80, 120, 140])),
+                # Passes instead of substeps, accelerated (solver.chebyshev): on the chart as at
+                # 50 x 50, where it lost to the substeps (doc/performance.md).
+                ('xpbd + levels, chebyshev 0.9', levels + ['solver.chebyshev=0.9'],
+                 [(40, 3), (60, 2), (30, 4)]),
                 ('xpbd', [], substeps_only([80, 160, 320])),
                 ('bullet', [], substeps_only([64, 128, 256]) + [(16, 10)])]
     runs = [pbd_run('swinging100', 'swinging.yaml', 'start', 'xpbd', 1, 1, 0.0, grid,
