@@ -168,11 +168,30 @@ PBD_AVX2 inline void storeEight(PositionColumns x, int p, const EightParticles& 
   }
 }
 
+// What the sweep reads of the links and of the projection's settings, as plain locals: read
+// through `links` and `how` instead, each array's address and each setting would be loaded again
+// for every four links, since a register store (_mm256_storeu_pd) may alias anything in memory.
+struct SweepInputs {
+  const int* i;
+  const int* j;
+  const StretchLinks::Segment* segments;
+  const double* rest_length;
+  const double* inverse_denominator;
+  const double* inverse_mass_i;
+  const double* inverse_mass_j;
+  double* lambda;    // nullptr: multipliers not kept
+  bool read_lambda;  // lambda kept and not starting from zero in this pass
+  bool unilateral;
+  bool track_change;
+  __m256d minus_stiffness;  // -k in every lane
+  __m256d alpha;            // alpha~ in every lane
+};
+
 // The arithmetic of projectOne on four links at once: a = their i ends, b = their j ends (x, y,
 // z registers, updated in place). Returns false, touching nothing, when a link of the four has
 // coincident ends (projectOne then reports it).
-PBD_AVX2 inline bool projectFour(int c, const StretchLinks& links, const StretchProjection& how,
-                                 double* lambda, __m256d* a, __m256d* b, __m256d& max_change) {
+PBD_AVX2 inline bool projectFour(int c, const SweepInputs& in, __m256d* a, __m256d* b,
+                                 __m256d& max_change) {
   const __m256d dx = _mm256_sub_pd(a[0], b[0]);
   const __m256d dy = _mm256_sub_pd(a[1], b[1]);
   const __m256d dz = _mm256_sub_pd(a[2], b[2]);
@@ -181,18 +200,16 @@ PBD_AVX2 inline bool projectFour(int c, const StretchLinks& links, const Stretch
   const __m256d long_enough = _mm256_cmp_pd(length, _mm256_set1_pd(kMinLength), _CMP_GE_OQ);
   if (_mm256_movemask_pd(long_enough) != 0xF) return false;
   const __m256d zero = _mm256_setzero_pd();
-  __m256d constraint = _mm256_sub_pd(length, _mm256_loadu_pd(&links.rest_length[c]));
-  if (how.unilateral) constraint = _mm256_max_pd(zero, constraint);
-  const __m256d old_lambda =
-      lambda != nullptr && !how.lambda_from_zero ? _mm256_loadu_pd(&lambda[c]) : zero;
-  const __m256d dlambda =
-      _mm256_mul_pd(_mm256_sub_pd(_mm256_mul_pd(_mm256_set1_pd(-how.stiffness), constraint),
-                                  _mm256_mul_pd(_mm256_set1_pd(how.alpha), old_lambda)),
-                    _mm256_loadu_pd(&links.inverse_denominator[c]));
-  if (lambda != nullptr) _mm256_storeu_pd(&lambda[c], _mm256_add_pd(old_lambda, dlambda));
+  __m256d constraint = _mm256_sub_pd(length, _mm256_loadu_pd(in.rest_length + c));
+  if (in.unilateral) constraint = _mm256_max_pd(zero, constraint);
+  const __m256d old_lambda = in.read_lambda ? _mm256_loadu_pd(in.lambda + c) : zero;
+  const __m256d dlambda = _mm256_mul_pd(_mm256_sub_pd(_mm256_mul_pd(in.minus_stiffness, constraint),
+                                                      _mm256_mul_pd(in.alpha, old_lambda)),
+                                        _mm256_loadu_pd(in.inverse_denominator + c));
+  if (in.lambda != nullptr) _mm256_storeu_pd(in.lambda + c, _mm256_add_pd(old_lambda, dlambda));
   const __m256d s = _mm256_div_pd(dlambda, length);
-  const __m256d wi = _mm256_loadu_pd(&links.inverse_mass_i[c]);
-  const __m256d wj = _mm256_loadu_pd(&links.inverse_mass_j[c]);
+  const __m256d wi = _mm256_loadu_pd(in.inverse_mass_i + c);
+  const __m256d wj = _mm256_loadu_pd(in.inverse_mass_j + c);
   const __m256d fa = _mm256_mul_pd(wi, s), fb = _mm256_mul_pd(wj, s);
   const __m256d d[3] = {dx, dy, dz};
   for (int k = 0; k < 3; ++k) {
@@ -200,7 +217,7 @@ PBD_AVX2 inline bool projectFour(int c, const StretchLinks& links, const Stretch
     b[k] = _mm256_sub_pd(b[k], _mm256_mul_pd(fb, d[k]));
   }
   // A skipped link (no free end) has inverse_denominator 0: dlambda 0, nothing moves.
-  if (how.track_change) {
+  if (in.track_change) {
     const __m256d magnitude = _mm256_andnot_pd(_mm256_set1_pd(-0.0), dlambda);
     max_change = _mm256_max_pd(max_change, _mm256_mul_pd(magnitude, _mm256_max_pd(wi, wj)));
   }
@@ -211,11 +228,25 @@ PBD_AVX2 void projectAvx2(const StretchLinks& links, int first_batch, int end_ba
                           const StretchProjection& how, PositionColumns x, double* lambda,
                           StretchPassResult& result) {
   __m256d max_change = _mm256_setzero_pd();
+  SweepInputs in;
+  in.i = links.i.data();
+  in.j = links.j.data();
+  in.segments = links.segments.data();
+  in.rest_length = links.rest_length.data();
+  in.inverse_denominator = links.inverse_denominator.data();
+  in.inverse_mass_i = links.inverse_mass_i.data();
+  in.inverse_mass_j = links.inverse_mass_j.data();
+  in.lambda = lambda;
+  in.read_lambda = lambda != nullptr && !how.lambda_from_zero;
+  in.unilateral = how.unilateral;
+  in.track_change = how.track_change;
+  in.minus_stiffness = _mm256_set1_pd(-how.stiffness);
+  in.alpha = _mm256_set1_pd(how.alpha);
   const int first = links.batch_segment[first_batch], last = links.batch_segment[end_batch];
   for (int g = first; g < last; ++g) {
-    const StretchLinks::Segment& segment = links.segments[g];
+    const StretchLinks::Segment& segment = in.segments[g];
     const int c = segment.begin;
-    const int pa = links.i[c], pb = links.j[c];
+    const int pa = in.i[c], pb = in.j[c];
     bool done = true;
     switch (segment.layout) {
       case StretchLinks::Layout::kScalar:
@@ -227,7 +258,7 @@ PBD_AVX2 void projectAvx2(const StretchLinks& links, int first_batch, int end_ba
         __m256d a[3], b[3];
         loadFour(x, pa, a);
         loadFour(x, pb, b);
-        done = projectFour(c, links, how, lambda, a, b, max_change);
+        done = projectFour(c, in, a, b, max_change);
         if (done) {
           storeFour(x, pa, a);
           storeFour(x, pb, b);
@@ -236,12 +267,12 @@ PBD_AVX2 void projectAvx2(const StretchLinks& links, int first_batch, int end_ba
       }
       case StretchLinks::Layout::kCrossed: {
         // j ends m+1, m, m+3, m+2: four from m, swapped within each pair (lane order 1 0 3 2).
-        const int pm = links.j[c + 1];
+        const int pm = in.j[c + 1];
         __m256d a[3], b[3];
         loadFour(x, pa, a);
         loadFour(x, pm, b);
         for (int d = 0; d < 3; ++d) b[d] = _mm256_permute_pd(b[d], 0x5);
-        done = projectFour(c, links, how, lambda, a, b, max_change);
+        done = projectFour(c, in, a, b, max_change);
         if (done) {
           for (int d = 0; d < 3; ++d) b[d] = _mm256_permute_pd(b[d], 0x5);
           storeFour(x, pa, a);
@@ -252,7 +283,7 @@ PBD_AVX2 void projectAvx2(const StretchLinks& links, int first_batch, int end_ba
       case StretchLinks::Layout::kInterleaved: {
         EightParticles e;
         loadEight(x, pa, e);
-        done = projectFour(c, links, how, lambda, e.even, e.odd, max_change);
+        done = projectFour(c, in, e.even, e.odd, max_change);
         if (done) storeEight(x, pa, e);
         break;
       }
@@ -260,7 +291,7 @@ PBD_AVX2 void projectAvx2(const StretchLinks& links, int first_batch, int end_ba
         EightParticles ea, eb;
         loadEight(x, pa, ea);
         loadEight(x, pb, eb);
-        done = projectFour(c, links, how, lambda, ea.even, eb.even, max_change);
+        done = projectFour(c, in, ea.even, eb.even, max_change);
         if (done) {
           storeEight(x, pa, ea);
           storeEight(x, pb, eb);
