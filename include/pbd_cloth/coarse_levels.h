@@ -41,8 +41,9 @@ class CoarseLevels {
   void prepareStep(const Particles& p);
   // One sweep over the coarse levels, coarsest first, on the cloth particles (kinematic particles
   // do not move). Returns the largest correction of a coarse link (0 without track_change: only
-  // solver.tolerance reads it). simd: solver.simd.
-  double project(Particles& p, bool interpolate, bool simd = true, bool track_change = true);
+  // solver.tolerance reads it). simd, avx512: solver.simd, solver.avx512.
+  double project(Particles& p, bool interpolate, bool simd = true, bool track_change = true,
+                 bool avx512 = true);
 
  private:
   struct Link {

@@ -99,9 +99,13 @@ struct SolverConfig {
   // node), that step is undone: Simulation::step, "Faults". Nothing a robot handles moves a cloth
   // at 100 m/s; a gripper jumping 1 m in one 60 Hz step drags its neighbours at about 60 m/s.
   double max_speed = 100.0;
-  // solver.simd: project the stretch links four at a time with AVX2 where the processor has it
-  // (stretch_links.h; bit-identical to the portable loop). false: always the portable loop.
+  // solver.simd: project the stretch links four at a time with AVX2 where the processor has it,
+  // eight at a time with AVX-512 where it has that (stretch_links.h; bit-identical to the
+  // portable loop). false: always the portable loop.
   bool simd = true;
+  // solver.avx512: false keeps the stretch links at AVX2 on a processor with AVX-512 (the same
+  // results to the bit; for comparing the two, doc/performance.md "Eight links a register").
+  bool avx512 = true;
   // solver.threads: threads that step the cloth (the calling one included): the stretch links of
   // a grid of 32 rows or more in blocks (stretch_links.h), prediction and velocity update in
   // ranges of particles. Bit-identical results for every count. 1 by default: a robot's computer

@@ -4,17 +4,18 @@
 //
 // Why batches: inside a batch no two links touch the same particle, so projecting them one after
 // the other (Gauss-Seidel) gives exactly what projecting them all at once from the same positions
-// gives. That lets four links go through one AVX2 register (the square root and the division, the
-// costly part, at once), and lets threads split a batch (solver.threads), with results that do not
-// depend on either: the order of the links is the order of the list, whatever runs it. The
+// gives. That lets four links go through one AVX2 register, or eight through one AVX-512 register
+// (the square root and the division, the costly part, at once), and lets threads split a batch
+// (solver.threads), with results that do not depend on either: the order of the links is the
+// order of the list, whatever runs it. The
 // projection reads and writes the positions in columns (PositionColumns, below), where four
 // consecutive particles' coordinates load without shuffles.
 //
-// Runtime dispatch: the AVX2 path is compiled for that instruction set only (a function target
-// attribute) and chosen at run time when the processor has it; any other x86-64 (a lab's older
-// PC) or another architecture runs the portable loop. The source file is compiled without
-// floating-point contraction, so both paths round the same operations the same way and give
-// bit-identical results (test_core: StretchLinks.*).
+// Runtime dispatch: the AVX-512 and AVX2 paths are compiled for their instruction set only (a
+// function target attribute) and the widest the processor has is chosen at run time; any other
+// x86-64 (a lab's older PC) or another architecture runs the portable loop. The source file is
+// compiled without floating-point contraction, so every path rounds the same operations the same
+// way and gives bit-identical results (test_core: StretchLinks.*).
 #pragma once
 
 #include <vector>
@@ -46,10 +47,12 @@ struct StretchLinks {
   std::vector<int> phase_task;
 
   // How a run of links is laid out in memory, found once in assign(). A grid's batches are rows
-  // of links whose ends step through the particles regularly; four such links are loaded and
-  // stored as whole registers (one per coordinate of four consecutive particles in the columns,
-  // PositionColumns), without gathers. kScalar: one link at a time (a mesh's links, the ends of a
-  // batch, a group with a coincident pair).
+  // of links whose ends step through the particles regularly; eight (or four) such links are
+  // loaded and stored as whole registers (one per coordinate of eight or four consecutive
+  // particles in the columns, PositionColumns), without gathers. A segment of eight goes through
+  // one AVX-512 register or two AVX2 ones, with the same result (its links share no particle).
+  // kScalar: one link at a time (a mesh's links, the ends of a batch, a group with a coincident
+  // pair). The patterns below are for four links; eight continue them (k < 8).
   enum class Layout : int {
     kScalar,       // [begin, end): any links, projected one by one
     kContiguous,   // 4 links: i = i0 + k, j = j0 + k (vertical and diagonal grid links)
@@ -100,7 +103,8 @@ struct StretchProjection {
   double alpha = 0.0;      // alpha~ = compliance / h^2, as given to prepareStep
   double stiffness = 1.0;  // k
   bool unilateral = false;
-  bool simd = true;  // false: the portable loop even where AVX2 is there (tests, benchmarks)
+  bool simd = true;    // false: the portable loop even where AVX2 is there (tests, benchmarks)
+  bool avx512 = true;  // false: AVX2 at most, even where AVX-512 is there (solver.avx512)
   // Whether the pass measures its largest correction (StretchPassResult::max_change), which only
   // solver.tolerance reads: without it the pass leaves out a multiplication and two maxima per
   // link, and max_change stays 0.
@@ -155,7 +159,9 @@ StretchPassResult projectStretchLinks(const StretchLinks& links, int first_batch
                                       const StretchProjection& how, PositionColumns position,
                                       double* lambda);
 
-// Whether projectStretchLinks takes the AVX2 path on this processor (with how.simd).
+// Whether projectStretchLinks can take the AVX2 path on this processor (with how.simd), and the
+// AVX-512 one (AVX-512F; with how.simd and how.avx512).
 bool stretchLinksUseAvx2();
+bool stretchLinksUseAvx512();
 
 }  // namespace pbd_cloth

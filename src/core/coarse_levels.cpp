@@ -159,7 +159,8 @@ void CoarseLevels::prepareStep(const Particles& p) {
   }
 }
 
-double CoarseLevels::project(Particles& p, bool interpolate, bool simd, bool track_change) {
+double CoarseLevels::project(Particles& p, bool interpolate, bool simd, bool track_change,
+                             bool avx512) {
   if (levels_.empty()) return 0.0;
   if (interpolate) {
     for (int i : levels_.front().particles) start_[i] = p.position[i];
@@ -184,6 +185,7 @@ double CoarseLevels::project(Particles& p, bool interpolate, bool simd, bool tra
       StretchProjection how;
       how.unilateral = true;
       how.simd = simd;
+      how.avx512 = avx512;
       how.track_change = track_change;
       max_change = std::max(max_change, projectStretchLinks(level.flat, 0, level.flat.batchCount(),
                                                             how, packed, nullptr)

@@ -360,6 +360,7 @@ double Solver::projectStretch(double h, Particles& p, const ClothTopology& topol
     how.alpha = alpha;
     how.stiffness = k;
     how.simd = config_.simd;
+    how.avx512 = config_.avx512;
     how.track_change = tracksLargestChange();
     how.lambda_from_zero = first_pass;
     // The sweep works on the positions in columns (stretch_links.h, PositionColumns): copied in
@@ -635,8 +636,8 @@ double Solver::projectPass(double h, Particles& p, const ClothTopology& topology
   // compliant (they are inextensible); the explicit springs do not come here.
   double max_change = 0.0;
   if (coarse_.levelCount() > 0 && stretch_compliance_ == 0.0) {
-    max_change =
-        coarse_.project(p, config_.levels_interpolate, config_.simd, tracksLargestChange());
+    max_change = coarse_.project(p, config_.levels_interpolate, config_.simd, tracksLargestChange(),
+                                 config_.avx512);
   }
   max_change = std::max(max_change, projectStretch(h, p, topology, first_pass));
   max_change = std::max(max_change, projectBend(h, p, topology, first_pass));

@@ -117,60 +117,9 @@ PBD_AVX2 int fromColumnsAvx2(PositionColumns from, int begin, int end, double* i
   return p;
 }
 
-// Four consecutive particles from p, one register per coordinate: three plain loads, no shuffle.
-PBD_AVX2 inline void loadFour(PositionColumns x, int p, __m256d* r) {
-  r[0] = _mm256_loadu_pd(x.x + p);
-  r[1] = _mm256_loadu_pd(x.y + p);
-  r[2] = _mm256_loadu_pd(x.z + p);
-}
-
-PBD_AVX2 inline void storeFour(PositionColumns x, int p, const __m256d* r) {
-  _mm256_storeu_pd(x.x + p, r[0]);
-  _mm256_storeu_pd(x.y + p, r[1]);
-  _mm256_storeu_pd(x.z + p, r[2]);
-}
-
-// One coordinate of eight consecutive particles (two registers of four) split into the even ones
-// (0 2 4 6) and the odd ones (1 3 5 7), and joined again.
-PBD_AVX2 inline void splitEvenOdd(__m256d low, __m256d high, __m256d& even, __m256d& odd) {
-  even = _mm256_permute4x64_pd(_mm256_unpacklo_pd(low, high), 0xD8);
-  odd = _mm256_permute4x64_pd(_mm256_unpackhi_pd(low, high), 0xD8);
-}
-
-PBD_AVX2 inline void joinEvenOdd(__m256d even, __m256d odd, __m256d& low, __m256d& high) {
-  const __m256d e0o0e2o2 = _mm256_unpacklo_pd(even, odd);
-  const __m256d e1o1e3o3 = _mm256_unpackhi_pd(even, odd);
-  low = _mm256_permute2f128_pd(e0o0e2o2, e1o1e3o3, 0x20);
-  high = _mm256_permute2f128_pd(e0o0e2o2, e1o1e3o3, 0x31);
-}
-
-// Eight consecutive particles from p: the even ones and the odd ones, as x, y, z registers each.
-struct EightParticles {
-  __m256d even[3];
-  __m256d odd[3];
-};
-
-PBD_AVX2 inline void loadEight(PositionColumns x, int p, EightParticles& e) {
-  const double* column[3] = {x.x, x.y, x.z};
-  for (int d = 0; d < 3; ++d) {
-    splitEvenOdd(_mm256_loadu_pd(column[d] + p), _mm256_loadu_pd(column[d] + p + 4), e.even[d],
-                 e.odd[d]);
-  }
-}
-
-PBD_AVX2 inline void storeEight(PositionColumns x, int p, const EightParticles& e) {
-  double* column[3] = {x.x, x.y, x.z};
-  for (int d = 0; d < 3; ++d) {
-    __m256d low, high;
-    joinEvenOdd(e.even[d], e.odd[d], low, high);
-    _mm256_storeu_pd(column[d] + p, low);
-    _mm256_storeu_pd(column[d] + p + 4, high);
-  }
-}
-
 // What the sweep reads of the links and of the projection's settings, as plain locals: read
 // through `links` and `how` instead, each array's address and each setting would be loaded again
-// for every four links, since a register store (_mm256_storeu_pd) may alias anything in memory.
+// for every group of links, since a register store may alias anything in memory.
 struct SweepInputs {
   const int* i;
   const int* j;
@@ -183,51 +132,11 @@ struct SweepInputs {
   bool read_lambda;  // lambda kept and not starting from zero in this pass
   bool unilateral;
   bool track_change;
-  __m256d minus_stiffness;  // -k in every lane
-  __m256d alpha;            // alpha~ in every lane
+  double minus_stiffness;  // -k
+  double alpha;            // alpha~
 };
 
-// The arithmetic of projectOne on four links at once: a = their i ends, b = their j ends (x, y,
-// z registers, updated in place). Returns false, touching nothing, when a link of the four has
-// coincident ends (projectOne then reports it).
-PBD_AVX2 inline bool projectFour(int c, const SweepInputs& in, __m256d* a, __m256d* b,
-                                 __m256d& max_change) {
-  const __m256d dx = _mm256_sub_pd(a[0], b[0]);
-  const __m256d dy = _mm256_sub_pd(a[1], b[1]);
-  const __m256d dz = _mm256_sub_pd(a[2], b[2]);
-  const __m256d length = _mm256_sqrt_pd(_mm256_add_pd(
-      _mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)), _mm256_mul_pd(dz, dz)));
-  const __m256d long_enough = _mm256_cmp_pd(length, _mm256_set1_pd(kMinLength), _CMP_GE_OQ);
-  if (_mm256_movemask_pd(long_enough) != 0xF) return false;
-  const __m256d zero = _mm256_setzero_pd();
-  __m256d constraint = _mm256_sub_pd(length, _mm256_loadu_pd(in.rest_length + c));
-  if (in.unilateral) constraint = _mm256_max_pd(zero, constraint);
-  const __m256d old_lambda = in.read_lambda ? _mm256_loadu_pd(in.lambda + c) : zero;
-  const __m256d dlambda = _mm256_mul_pd(_mm256_sub_pd(_mm256_mul_pd(in.minus_stiffness, constraint),
-                                                      _mm256_mul_pd(in.alpha, old_lambda)),
-                                        _mm256_loadu_pd(in.inverse_denominator + c));
-  if (in.lambda != nullptr) _mm256_storeu_pd(in.lambda + c, _mm256_add_pd(old_lambda, dlambda));
-  const __m256d s = _mm256_div_pd(dlambda, length);
-  const __m256d wi = _mm256_loadu_pd(in.inverse_mass_i + c);
-  const __m256d wj = _mm256_loadu_pd(in.inverse_mass_j + c);
-  const __m256d fa = _mm256_mul_pd(wi, s), fb = _mm256_mul_pd(wj, s);
-  const __m256d d[3] = {dx, dy, dz};
-  for (int k = 0; k < 3; ++k) {
-    a[k] = _mm256_add_pd(a[k], _mm256_mul_pd(fa, d[k]));
-    b[k] = _mm256_sub_pd(b[k], _mm256_mul_pd(fb, d[k]));
-  }
-  // A skipped link (no free end) has inverse_denominator 0: dlambda 0, nothing moves.
-  if (in.track_change) {
-    const __m256d magnitude = _mm256_andnot_pd(_mm256_set1_pd(-0.0), dlambda);
-    max_change = _mm256_max_pd(max_change, _mm256_mul_pd(magnitude, _mm256_max_pd(wi, wj)));
-  }
-  return true;
-}
-
-PBD_AVX2 void projectAvx2(const StretchLinks& links, int first_batch, int end_batch,
-                          const StretchProjection& how, PositionColumns x, double* lambda,
-                          StretchPassResult& result) {
-  __m256d max_change = _mm256_setzero_pd();
+SweepInputs sweepInputs(const StretchLinks& links, const StretchProjection& how, double* lambda) {
   SweepInputs in;
   in.i = links.i.data();
   in.j = links.j.data();
@@ -240,74 +149,290 @@ PBD_AVX2 void projectAvx2(const StretchLinks& links, int first_batch, int end_ba
   in.read_lambda = lambda != nullptr && !how.lambda_from_zero;
   in.unilateral = how.unilateral;
   in.track_change = how.track_change;
-  in.minus_stiffness = _mm256_set1_pd(-how.stiffness);
-  in.alpha = _mm256_set1_pd(how.alpha);
+  in.minus_stiffness = -how.stiffness;
+  in.alpha = how.alpha;
+  return in;
+}
+
+// The projection's settings in every lane of a register, broadcast once per sweep.
+template <class L>
+struct Settings {
+  typename L::Reg minus_stiffness;  // -k
+  typename L::Reg alpha;            // alpha~
+  explicit Settings(const SweepInputs& in) {
+    L::broadcast(in.minus_stiffness, minus_stiffness);
+    L::broadcast(in.alpha, alpha);
+  }
+};
+
+// The register width as a type, so that the sweep below is written once for both: FourLanes
+// (AVX2, 256 bits) and EightLanes (AVX-512, 512 bits). Each holds what GCC's vector operators do
+// not: the width's loads, stores, shuffles, square root, maximum and comparison. Registers are
+// passed by reference: the generic code (compiled for no instruction set of its own, inlined into
+// the sweep of each width by `flatten`) never passes a vector by value.
+struct FourLanes {
+  using Reg = __m256d;
+  static constexpr int kLinks = 4;
+  PBD_AVX2 static void load(const double* p, Reg& r) { r = _mm256_loadu_pd(p); }
+  PBD_AVX2 static void store(double* p, const Reg& r) { _mm256_storeu_pd(p, r); }
+  PBD_AVX2 static void zero(Reg& r) { r = _mm256_setzero_pd(); }
+  PBD_AVX2 static void broadcast(double value, Reg& r) { r = _mm256_set1_pd(value); }
+  // Lane order 1 0 3 2 (kCrossed's j ends).
+  PBD_AVX2 static void swapPairs(Reg& r) { r = _mm256_permute_pd(r, 0x5); }
+  // One coordinate of eight consecutive particles (two registers) split into the even ones (0 2 4
+  // 6) and the odd ones (1 3 5 7), and joined again.
+  PBD_AVX2 static void split(const Reg& low, const Reg& high, Reg& even, Reg& odd) {
+    even = _mm256_permute4x64_pd(_mm256_unpacklo_pd(low, high), 0xD8);
+    odd = _mm256_permute4x64_pd(_mm256_unpackhi_pd(low, high), 0xD8);
+  }
+  PBD_AVX2 static void join(const Reg& even, const Reg& odd, Reg& low, Reg& high) {
+    const __m256d e0o0e2o2 = _mm256_unpacklo_pd(even, odd);
+    const __m256d e1o1e3o3 = _mm256_unpackhi_pd(even, odd);
+    low = _mm256_permute2f128_pd(e0o0e2o2, e1o1e3o3, 0x20);
+    high = _mm256_permute2f128_pd(e0o0e2o2, e1o1e3o3, 0x31);
+  }
+  PBD_AVX2 static void sqrt(const Reg& r, Reg& root) { root = _mm256_sqrt_pd(r); }
+  PBD_AVX2 static void max(const Reg& a, const Reg& b, Reg& r) { r = _mm256_max_pd(a, b); }
+  PBD_AVX2 static void abs(const Reg& r, Reg& magnitude) {
+    magnitude = _mm256_andnot_pd(_mm256_set1_pd(-0.0), r);
+  }
+  PBD_AVX2 static bool allAtLeast(const Reg& r, double bound) {
+    return _mm256_movemask_pd(_mm256_cmp_pd(r, _mm256_set1_pd(bound), _CMP_GE_OQ)) == 0xF;
+  }
+  PBD_AVX2 static double largest(const Reg& r) {
+    alignas(32) double lanes[kLinks];
+    _mm256_store_pd(lanes, r);
+    return *std::max_element(lanes, lanes + kLinks);
+  }
+};
+
+// AVX-512F only (every AVX-512 processor has it). The masked forms with every lane set are the
+// plain instructions: GCC 12's unmasked _mm512_sqrt_pd, _mm512_max_pd and _mm512_permute_pd
+// start from _mm512_undefined_pd and warn that it is used uninitialized (-Wmaybe-uninitialized).
+#define PBD_AVX512 __attribute__((target("avx512f")))
+struct EightLanes {
+  using Reg = __m512d;
+  static constexpr int kLinks = 8;
+  static constexpr __mmask8 kAll = 0xFF;
+  PBD_AVX512 static void load(const double* p, Reg& r) { r = _mm512_loadu_pd(p); }
+  PBD_AVX512 static void store(double* p, const Reg& r) { _mm512_storeu_pd(p, r); }
+  PBD_AVX512 static void zero(Reg& r) { r = _mm512_setzero_pd(); }
+  PBD_AVX512 static void broadcast(double value, Reg& r) { r = _mm512_set1_pd(value); }
+  PBD_AVX512 static void swapPairs(Reg& r) { r = _mm512_maskz_permute_pd(kAll, r, 0x55); }
+  PBD_AVX512 static void split(const Reg& low, const Reg& high, Reg& even, Reg& odd) {
+    even = _mm512_permutex2var_pd(low, _mm512_set_epi64(14, 12, 10, 8, 6, 4, 2, 0), high);
+    odd = _mm512_permutex2var_pd(low, _mm512_set_epi64(15, 13, 11, 9, 7, 5, 3, 1), high);
+  }
+  PBD_AVX512 static void join(const Reg& even, const Reg& odd, Reg& low, Reg& high) {
+    low = _mm512_permutex2var_pd(even, _mm512_set_epi64(11, 3, 10, 2, 9, 1, 8, 0), odd);
+    high = _mm512_permutex2var_pd(even, _mm512_set_epi64(15, 7, 14, 6, 13, 5, 12, 4), odd);
+  }
+  PBD_AVX512 static void sqrt(const Reg& r, Reg& root) { root = _mm512_maskz_sqrt_pd(kAll, r); }
+  PBD_AVX512 static void max(const Reg& a, const Reg& b, Reg& r) {
+    r = _mm512_maskz_max_pd(kAll, a, b);
+  }
+  PBD_AVX512 static void abs(const Reg& r, Reg& magnitude) { magnitude = _mm512_abs_pd(r); }
+  PBD_AVX512 static bool allAtLeast(const Reg& r, double bound) {
+    return _mm512_cmp_pd_mask(r, _mm512_set1_pd(bound), _CMP_GE_OQ) == kAll;
+  }
+  PBD_AVX512 static double largest(const Reg& r) {
+    alignas(64) double lanes[kLinks];
+    _mm512_store_pd(lanes, r);
+    return *std::max_element(lanes, lanes + kLinks);
+  }
+};
+
+// The arithmetic of projectOne on a register of links at once, in the same operations and order
+// (so the same roundings: the paths agree to the bit): a = their i ends, b = their j ends (x, y,
+// z registers, updated in place). The operators are GCC's vector arithmetic, which the sweep's
+// instruction set compiles to its own (vsubpd ymm, or zmm). Returns false, touching nothing,
+// when a link of the register has coincident ends (projectOne then reports it).
+template <class L>
+inline bool projectLinks(int c, const SweepInputs& in, const Settings<L>& k, typename L::Reg* a,
+                         typename L::Reg* b, typename L::Reg& max_change) {
+  using Reg = typename L::Reg;
+  const Reg d[3] = {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
+  Reg length;
+  L::sqrt((d[0] * d[0] + d[1] * d[1]) + d[2] * d[2], length);
+  if (!L::allAtLeast(length, kMinLength)) return false;
+  const Reg zero = {};
+  Reg rest, inverse_denominator, wi, wj, old_lambda = zero;
+  L::load(in.rest_length + c, rest);
+  Reg constraint = length - rest;
+  if (in.unilateral) L::max(zero, constraint, constraint);
+  if (in.read_lambda) L::load(in.lambda + c, old_lambda);
+  L::load(in.inverse_denominator + c, inverse_denominator);
+  const Reg dlambda = (k.minus_stiffness * constraint - k.alpha * old_lambda) * inverse_denominator;
+  if (in.lambda != nullptr) L::store(in.lambda + c, old_lambda + dlambda);
+  const Reg s = dlambda / length;
+  L::load(in.inverse_mass_i + c, wi);
+  L::load(in.inverse_mass_j + c, wj);
+  const Reg fa = wi * s, fb = wj * s;
+  for (int q = 0; q < 3; ++q) {
+    a[q] = a[q] + fa * d[q];
+    b[q] = b[q] - fb * d[q];
+  }
+  // A skipped link (no free end) has inverse_denominator 0: dlambda 0, nothing moves.
+  if (in.track_change) {
+    Reg magnitude, larger_w;
+    L::abs(dlambda, magnitude);
+    L::max(wi, wj, larger_w);
+    L::max(max_change, magnitude * larger_w, max_change);
+  }
+  return true;
+}
+
+// One register's worth of consecutive particles from p (L::kLinks of them), a register per
+// coordinate: three plain loads, no shuffle.
+template <class L>
+inline void loadRow(PositionColumns x, int p, typename L::Reg* r) {
+  L::load(x.x + p, r[0]);
+  L::load(x.y + p, r[1]);
+  L::load(x.z + p, r[2]);
+}
+
+template <class L>
+inline void storeRow(PositionColumns x, int p, const typename L::Reg* r) {
+  L::store(x.x + p, r[0]);
+  L::store(x.y + p, r[1]);
+  L::store(x.z + p, r[2]);
+}
+
+// Two registers' worth of consecutive particles from p: the even ones and the odd ones, as x, y,
+// z registers each.
+template <class L>
+struct EvenOdd {
+  typename L::Reg even[3];
+  typename L::Reg odd[3];
+};
+
+template <class L>
+inline void loadEvenOdd(PositionColumns x, int p, EvenOdd<L>& e) {
+  const double* column[3] = {x.x, x.y, x.z};
+  for (int d = 0; d < 3; ++d) {
+    typename L::Reg low, high;
+    L::load(column[d] + p, low);
+    L::load(column[d] + p + L::kLinks, high);
+    L::split(low, high, e.even[d], e.odd[d]);
+  }
+}
+
+template <class L>
+inline void storeEvenOdd(PositionColumns x, int p, const EvenOdd<L>& e) {
+  double* column[3] = {x.x, x.y, x.z};
+  for (int d = 0; d < 3; ++d) {
+    typename L::Reg low, high;
+    L::join(e.even[d], e.odd[d], low, high);
+    L::store(column[d] + p, low);
+    L::store(column[d] + p + L::kLinks, high);
+  }
+}
+
+// L::kLinks links from c laid out as `layout` (findSegments), loaded as whole registers,
+// projected and stored back. Returns false, touching nothing, on coincident ends.
+template <class L>
+inline bool projectRegister(StretchLinks::Layout layout, int c, const SweepInputs& in,
+                            const Settings<L>& k, PositionColumns x, typename L::Reg& max_change) {
+  using Reg = typename L::Reg;
+  const int pa = in.i[c], pb = in.j[c];
+  switch (layout) {
+    case StretchLinks::Layout::kContiguous: {
+      Reg a[3], b[3];
+      loadRow<L>(x, pa, a);
+      loadRow<L>(x, pb, b);
+      if (!projectLinks<L>(c, in, k, a, b, max_change)) return false;
+      storeRow<L>(x, pa, a);
+      storeRow<L>(x, pb, b);
+      return true;
+    }
+    case StretchLinks::Layout::kCrossed: {
+      // j ends m+1, m, m+3, m+2, ...: a register from m, swapped within each pair.
+      const int pm = in.j[c + 1];
+      Reg a[3], b[3];
+      loadRow<L>(x, pa, a);
+      loadRow<L>(x, pm, b);
+      for (int d = 0; d < 3; ++d) L::swapPairs(b[d]);
+      if (!projectLinks<L>(c, in, k, a, b, max_change)) return false;
+      for (int d = 0; d < 3; ++d) L::swapPairs(b[d]);
+      storeRow<L>(x, pa, a);
+      storeRow<L>(x, pm, b);
+      return true;
+    }
+    case StretchLinks::Layout::kInterleaved: {
+      EvenOdd<L> e;
+      loadEvenOdd<L>(x, pa, e);
+      if (!projectLinks<L>(c, in, k, e.even, e.odd, max_change)) return false;
+      storeEvenOdd<L>(x, pa, e);
+      return true;
+    }
+    case StretchLinks::Layout::kStrided: {
+      EvenOdd<L> ea, eb;
+      loadEvenOdd<L>(x, pa, ea);
+      loadEvenOdd<L>(x, pb, eb);
+      if (!projectLinks<L>(c, in, k, ea.even, eb.even, max_change)) return false;
+      storeEvenOdd<L>(x, pa, ea);
+      storeEvenOdd<L>(x, pb, eb);
+      return true;
+    }
+    case StretchLinks::Layout::kScalar:
+      break;
+  }
+  return false;
+}
+
+// The sweep over batches [first_batch, end_batch): a segment of Wide::kLinks links (or a multiple)
+// in Wide registers, one of four in Narrow ones, the rest link by link. Any register split gives
+// the same result: the links of a segment share no particle.
+template <class Wide, class Narrow>
+inline void sweepRegisters(const StretchLinks& links, int first_batch, int end_batch,
+                           const StretchProjection& how, PositionColumns x, double* lambda,
+                           StretchPassResult& result) {
+  const SweepInputs in = sweepInputs(links, how, lambda);
+  const Settings<Wide> wide_settings(in);
+  const Settings<Narrow> narrow_settings(in);
+  typename Wide::Reg wide_change;
+  typename Narrow::Reg narrow_change;
+  Wide::zero(wide_change);
+  Narrow::zero(narrow_change);
+  auto oneByOne = [&](int begin, int end) {
+    for (int k = begin; k < end; ++k) projectOne(k, links, how, x, lambda, result);
+  };
   const int first = links.batch_segment[first_batch], last = links.batch_segment[end_batch];
   for (int g = first; g < last; ++g) {
-    const StretchLinks::Segment& segment = in.segments[g];
-    const int c = segment.begin;
-    const int pa = in.i[c], pb = in.j[c];
-    bool done = true;
-    switch (segment.layout) {
-      case StretchLinks::Layout::kScalar:
-        for (int k = segment.begin; k < segment.end; ++k) {
-          projectOne(k, links, how, x, lambda, result);
-        }
-        break;
-      case StretchLinks::Layout::kContiguous: {
-        __m256d a[3], b[3];
-        loadFour(x, pa, a);
-        loadFour(x, pb, b);
-        done = projectFour(c, in, a, b, max_change);
-        if (done) {
-          storeFour(x, pa, a);
-          storeFour(x, pb, b);
-        }
-        break;
+    const StretchLinks::Segment segment = in.segments[g];
+    if (segment.layout == StretchLinks::Layout::kScalar) {
+      oneByOne(segment.begin, segment.end);
+    } else if (segment.end - segment.begin == Wide::kLinks) {
+      if (!projectRegister<Wide>(segment.layout, segment.begin, in, wide_settings, x,
+                                 wide_change)) {
+        oneByOne(segment.begin, segment.end);
       }
-      case StretchLinks::Layout::kCrossed: {
-        // j ends m+1, m, m+3, m+2: four from m, swapped within each pair (lane order 1 0 3 2).
-        const int pm = in.j[c + 1];
-        __m256d a[3], b[3];
-        loadFour(x, pa, a);
-        loadFour(x, pm, b);
-        for (int d = 0; d < 3; ++d) b[d] = _mm256_permute_pd(b[d], 0x5);
-        done = projectFour(c, in, a, b, max_change);
-        if (done) {
-          for (int d = 0; d < 3; ++d) b[d] = _mm256_permute_pd(b[d], 0x5);
-          storeFour(x, pa, a);
-          storeFour(x, pm, b);
+    } else {
+      for (int c = segment.begin; c < segment.end; c += Narrow::kLinks) {
+        if (!projectRegister<Narrow>(segment.layout, c, in, narrow_settings, x, narrow_change)) {
+          oneByOne(c, c + Narrow::kLinks);
         }
-        break;
-      }
-      case StretchLinks::Layout::kInterleaved: {
-        EightParticles e;
-        loadEight(x, pa, e);
-        done = projectFour(c, in, e.even, e.odd, max_change);
-        if (done) storeEight(x, pa, e);
-        break;
-      }
-      case StretchLinks::Layout::kStrided: {
-        EightParticles ea, eb;
-        loadEight(x, pa, ea);
-        loadEight(x, pb, eb);
-        done = projectFour(c, in, ea.even, eb.even, max_change);
-        if (done) {
-          storeEight(x, pa, ea);
-          storeEight(x, pb, eb);
-        }
-        break;
-      }
-    }
-    if (!done) {
-      for (int k = segment.begin; k < segment.end; ++k) {
-        projectOne(k, links, how, x, lambda, result);
       }
     }
   }
-  alignas(32) double lanes[4];
-  _mm256_store_pd(lanes, max_change);
-  for (double lane : lanes) result.max_change = std::max(result.max_change, lane);
+  result.max_change =
+      std::max({result.max_change, Wide::largest(wide_change), Narrow::largest(narrow_change)});
+}
+
+// The sweep of each width, compiled for its instruction set with everything it calls inlined
+// (flatten): the generic code above becomes AVX2 code here and AVX-512 code below.
+__attribute__((flatten)) PBD_AVX2 void projectAvx2(const StretchLinks& links, int first_batch,
+                                                   int end_batch, const StretchProjection& how,
+                                                   PositionColumns x, double* lambda,
+                                                   StretchPassResult& result) {
+  sweepRegisters<FourLanes, FourLanes>(links, first_batch, end_batch, how, x, lambda, result);
+}
+
+__attribute__((flatten)) PBD_AVX512 void projectAvx512(const StretchLinks& links, int first_batch,
+                                                       int end_batch, const StretchProjection& how,
+                                                       PositionColumns x, double* lambda,
+                                                       StretchPassResult& result) {
+  sweepRegisters<EightLanes, FourLanes>(links, first_batch, end_batch, how, x, lambda, result);
 }
 #endif
 
@@ -425,12 +550,13 @@ void StretchPassResult::merge(const StretchPassResult& other) {
   degenerate += other.degenerate;
 }
 
-// The register layout of four links from c, if they have one: the particles each register
-// touches (4 or 8 from i0, 4 or 8 from j0) must lie inside the particles, and the two windows
-// must not overlap (or be the same window, interleaved).
-// A strided window loads and stores eight particles of which its links use every other one: the
-// four between are written back as they were read. With threads (tasks of grid rows, grid_cols >
-// 0) another task may move those meanwhile, and the store would undo its move: a strided window
+// The register layout of n links from c (n = 8, else 4), if they have one: the particles each
+// register touches (n or 2n from i0, n or 2n from j0) must lie inside the particles, and the two
+// windows must not overlap (or be the same window, interleaved). Eight are tried first: one
+// AVX-512 register, or two AVX2 ones.
+// A strided window loads and stores 2n particles of which its links use every other one: the n
+// between are written back as they were read. With threads (tasks of grid rows, grid_cols > 0)
+// another task may move those meanwhile, and the store would undo its move: a strided window
 // must then lie in one grid row, which no other task of its phase touches (tasks hold different
 // rows; seams are a block apart).
 void StretchLinks::findSegments(int particle_count, int grid_rows, int grid_cols) {
@@ -440,15 +566,15 @@ void StretchLinks::findSegments(int particle_count, int grid_rows, int grid_cols
     const int last = first + count - 1;
     return first < grid_size && last < grid_size && first / grid_cols == last / grid_cols;
   };
-  auto layoutAt = [&](int c) {
+  auto layoutAt = [&](int c, int n) {
     const int i0 = i[c], j0 = j[c];
     bool contiguous = true, strided = true, interleaved = true, crossed = true;
-    const int m = j[c + 1];  // kCrossed: the first of the four j ends in memory
-    for (int k = 1; k < 4; ++k) {
+    const int m = j[c + 1];  // kCrossed: the first of the n j ends in memory
+    for (int k = 1; k < n; ++k) {
       contiguous = contiguous && i[c + k] == i0 + k && j[c + k] == j0 + k;
       strided = strided && i[c + k] == i0 + 2 * k && j[c + k] == j0 + 2 * k;
     }
-    for (int k = 0; k < 4; ++k) crossed = crossed && i[c + k] == i0 + k && j[c + k] == m + (k ^ 1);
+    for (int k = 0; k < n; ++k) crossed = crossed && i[c + k] == i0 + k && j[c + k] == m + (k ^ 1);
     interleaved = strided && j0 == i0 + 1;
     const int gap = std::abs(j0 - i0);
     // Both windows of `width` particles, from i0 and from j_first, inside the particles.
@@ -456,10 +582,10 @@ void StretchLinks::findSegments(int particle_count, int grid_rows, int grid_cols
       return i0 >= 0 && j_first >= 0 && i0 + width <= particle_count &&
              j_first + width <= particle_count;
     };
-    if (contiguous && gap >= 4 && fits(4, j0)) return Layout::kContiguous;
-    if (crossed && std::abs(m - i0) >= 4 && fits(4, m)) return Layout::kCrossed;
-    if (interleaved && fits(8, j0)) return Layout::kInterleaved;
-    if (strided && gap >= 8 && fits(8, j0) && oneRow(i0, 8) && oneRow(j0, 8)) {
+    if (contiguous && gap >= n && fits(n, j0)) return Layout::kContiguous;
+    if (crossed && std::abs(m - i0) >= n && fits(n, m)) return Layout::kCrossed;
+    if (interleaved && fits(2 * n, j0)) return Layout::kInterleaved;
+    if (strided && gap >= 2 * n && fits(2 * n, j0) && oneRow(i0, 2 * n) && oneRow(j0, 2 * n)) {
       return Layout::kStrided;
     }
     return Layout::kScalar;
@@ -468,10 +594,15 @@ void StretchLinks::findSegments(int particle_count, int grid_rows, int grid_cols
     const int end = batch_begin[b + 1];
     int c = batch_begin[b];
     while (c < end) {
-      const Layout layout = c + 4 <= end ? layoutAt(c) : Layout::kScalar;
+      int n = 8;
+      Layout layout = c + 8 <= end ? layoutAt(c, 8) : Layout::kScalar;
+      if (layout == Layout::kScalar) {
+        n = 4;
+        layout = c + 4 <= end ? layoutAt(c, 4) : Layout::kScalar;
+      }
       if (layout != Layout::kScalar) {
-        segments.push_back({c, c + 4, layout});
-        c += 4;
+        segments.push_back({c, c + n, layout});
+        c += n;
       } else if (!segments.empty() && segments.back().layout == Layout::kScalar &&
                  segments.back().end == c &&
                  static_cast<int>(segments.size()) > batch_segment.back()) {
@@ -496,6 +627,15 @@ void StretchLinks::prepareStep(const double* inverse_mass, double alpha) {
   }
 }
 
+bool stretchLinksUseAvx512() {
+#ifdef PBD_CLOTH_HAVE_AVX2_PATH
+  static const bool has_avx512 = __builtin_cpu_supports("avx512f");
+  return has_avx512;
+#else
+  return false;
+#endif
+}
+
 bool stretchLinksUseAvx2() {
 #ifdef PBD_CLOTH_HAVE_AVX2_PATH
   static const bool has_avx2 = __builtin_cpu_supports("avx2");
@@ -511,6 +651,10 @@ StretchPassResult projectStretchLinks(const StretchLinks& links, int first_batch
   StretchPassResult result;
   if (first_batch >= end_batch) return result;
 #ifdef PBD_CLOTH_HAVE_AVX2_PATH
+  if (how.simd && how.avx512 && stretchLinksUseAvx512()) {
+    projectAvx512(links, first_batch, end_batch, how, position, lambda, result);
+    return result;
+  }
   if (how.simd && stretchLinksUseAvx2()) {
     projectAvx2(links, first_batch, end_batch, how, position, lambda, result);
     return result;

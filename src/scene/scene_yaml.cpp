@@ -224,7 +224,7 @@ void readSolver(const YAML::Node& node, SolverConfig& s) {
                                        "max_speed",        "simd",
                                        "threads",          "sleep_speed",
                                        "sleep_time",       "search_window",
-                                       "chebyshev"});
+                                       "chebyshev",        "avx512"});
   if (map.has("method")) {
     s.method = toWord(map.get("method"), map.keyOf("method"),
                       {Method::kXpbd, Method::kPbd, Method::kVerlet, Method::kMassSpring});
@@ -250,6 +250,7 @@ void readSolver(const YAML::Node& node, SolverConfig& s) {
   map.read("chebyshev", s.chebyshev);
   map.read("max_speed", s.max_speed);
   map.read("simd", s.simd);
+  map.read("avx512", s.avx512);
   map.read("threads", s.threads);
   map.read("sleep_speed", s.sleep_speed);
   map.read("sleep_time", s.sleep_time);

@@ -161,11 +161,21 @@ struct StretchRig {
   std::vector<double> lambda;
 };
 
+// The path a projection takes on this processor.
+const char* stretchPath(const StretchProjection& how) {
+  if (how.simd && how.avx512 && stretchLinksUseAvx512()) return "projectStretchLinks, AVX-512";
+  if (how.simd && stretchLinksUseAvx2()) return "projectStretchLinks, AVX2";
+  return "projectStretchLinks, portable";
+}
+
+// simd 1: the widest path this processor has (AVX-512, else AVX2), 0: the portable loop, 2: AVX2
+// at most (solver.avx512: false), to compare the two register widths on an AVX-512 processor.
 void BM_StretchLinks(benchmark::State& state) {
   StretchRig rig;
   StretchProjection how;
   how.alpha = 1e-9;  // a compliance, so the multiplier term is computed as in XPBD
   how.simd = state.range(0) != 0;
+  how.avx512 = state.range(0) != 2;
   rig.links.prepareStep(rig.inverse_mass.data(), how.alpha);
   double total = 0.0;
   for (auto _ : state) {
@@ -176,8 +186,7 @@ void BM_StretchLinks(benchmark::State& state) {
     total += secondsSince(start);
   }
   setCounters(state, rig.links.size(), total, rig.links.size());
-  state.SetLabel(how.simd && stretchLinksUseAvx2() ? "projectStretchLinks, AVX2"
-                                                   : "projectStretchLinks, portable");
+  state.SetLabel(stretchPath(how));
 }
 
 // The same arithmetic, in the same order, on the same arrays (the link list, the per-step inverse
@@ -680,7 +689,7 @@ BENCHMARK(BM_StretchProjection)
     ->Args({kXpbd, kJacobi, 50})
     ->UseManualTime()
     ->Unit(benchmark::kMicrosecond);
-BENCHMARK(BM_StretchLinks)->ArgName("simd")->Arg(1)->Arg(0)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_StretchLinks)->ArgName("simd")->Arg(1)->Arg(0)->Arg(2)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_StretchBareLoop)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_DirectFactorize)->ArgName("rows")->Arg(50)->Arg(100)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_DirectSolve)->ArgName("rows")->Arg(50)->Arg(100)->Unit(benchmark::kMillisecond);

@@ -66,7 +66,7 @@ KeySet readerKeys(const std::string& scene) {
     sceneFromYaml(YAML::Load(scene));
   } catch (const ConfigError& error) {
     const std::string message = error.what();
-    static const std::regex kList(R"(\((?:known here|it takes): ([a-z_, ]+)\))");
+    static const std::regex kList(R"(\((?:known here|it takes): ([a-z0-9_, ]+)\))");
     std::smatch match;
     if (!std::regex_search(message, match, kList)) {
       ADD_FAILURE() << "no key list in the reader's refusal of " << scene << ": " << message;

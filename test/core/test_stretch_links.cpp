@@ -43,6 +43,22 @@ StretchPassResult projectOn(const StretchLinks& links, int first, int end,
   return result;
 }
 
+// The sweep's paths: the widest this processor has (AVX-512, else AVX2, else the portable loop),
+// AVX2 at most, and the portable loop.
+struct SweepPath {
+  const char* name;
+  bool simd;
+  bool avx512;
+  StretchProjection how() const {
+    StretchProjection how;
+    how.simd = simd;
+    how.avx512 = avx512;
+    return how;
+  }
+};
+const SweepPath kSweepPaths[] = {
+    {"widest", true, true}, {"AVX2 at most", true, false}, {"portable", false, false}};
+
 StretchLinks linksOf(const SceneConfig& scene) {
   Particles particles;
   ClothTopology topology;
@@ -71,17 +87,19 @@ TEST(StretchLinks, NoTwoLinksOfABatchShareAParticle) {
 }
 
 // The grid's sweep is laid out in runs that step through the particles (cloth_builder.cpp): on
-// both 20 x 20 grids at least 75 % of the links go four to a register (the rest: the last links
-// of each run, fewer than four; on the 50 x 50 benchmark cloth, 95 %).
+// both 20 x 20 grids at least 75 % of the links go eight to a register (83 %; the rest: the last
+// links of each run, fewer than four; on the 50 x 50 benchmark cloth, 95 % go to registers).
 TEST(StretchLinks, GridLinksLoadAsWholeRegisters) {
   for (int diagonals : {1, 2}) {
     const StretchLinks links = linksOf(swingingScene(diagonals));
-    int in_registers = 0;
+    int in_registers = 0, in_eights = 0;
     for (const StretchLinks::Segment& segment : links.segments) {
-      if (segment.layout != StretchLinks::Layout::kScalar)
-        in_registers += segment.end - segment.begin;
+      if (segment.layout == StretchLinks::Layout::kScalar) continue;
+      in_registers += segment.end - segment.begin;
+      if (segment.end - segment.begin == 8) in_eights += 8;
     }
     EXPECT_GE(in_registers, 0.75 * links.size()) << "diagonals " << diagonals;
+    EXPECT_GE(in_eights, 0.75 * links.size()) << "diagonals " << diagonals;
     // Segments cover the list in order, each inside its batch.
     int next = 0;
     for (int b = 0; b < links.batchCount(); ++b) {
@@ -95,68 +113,80 @@ TEST(StretchLinks, GridLinksLoadAsWholeRegisters) {
   }
 }
 
-// Three seconds of swinging, compliant and inextensible, both grids: the AVX2 path (where this
-// processor has it) and the portable loop end in the same positions, bit for bit.
-TEST(StretchLinks, Avx2AndPortablePathsAgreeToTheBit) {
+// Three seconds of swinging, compliant and inextensible, both grids: the AVX-512 path (eight
+// links a register), the AVX2 path (four) and the portable loop, each where this processor has
+// it, end in the same positions, bit for bit.
+TEST(StretchLinks, Avx512Avx2AndPortablePathsAgreeToTheBit) {
   if (!stretchLinksUseAvx2()) GTEST_SKIP() << "no AVX2 here: only the portable path runs";
   for (int diagonals : {1, 2}) {
     for (double compliance : {0.0, 1e-6}) {
       SceneConfig scene = swingingScene(diagonals);
       scene.cloth.stretch_compliance = compliance;
       scene.solver.levels = compliance == 0.0 ? 3 : 0;
-      SceneConfig portable = scene;
+      SceneConfig avx2 = scene, portable = scene;
+      avx2.solver.avx512 = false;
       portable.solver.simd = false;
-      Simulation with_simd(scene), without(portable);
-      const Vec3 corner_start = with_simd.particles().position[399];
+      Simulation widest(scene), four(avx2), without(portable);
+      const Vec3 corner_start = widest.particles().position[399];
       for (int step = 0; step < 180; ++step) {
-        with_simd.step();
+        widest.step();
+        four.step();
         without.step();
       }
-      EXPECT_EQ(with_simd.particles().position, without.particles().position)
-          << "diagonals " << diagonals << ", compliance " << compliance;
+      EXPECT_EQ(four.particles().position, without.particles().position)
+          << "AVX2, diagonals " << diagonals << ", compliance " << compliance;
+      EXPECT_EQ(widest.particles().position, without.particles().position)
+          << (stretchLinksUseAvx512() ? "AVX-512" : "AVX2") << ", diagonals " << diagonals
+          << ", compliance " << compliance;
       // And it moved: a test of two frozen cloths would pass too.
-      EXPECT_GT((with_simd.particles().position[399] - corner_start).norm(), 0.2);
+      EXPECT_GT((widest.particles().position[399] - corner_start).norm(), 0.2);
     }
   }
 }
 
-// Coincident ends inside a group of four: that group goes link by link, the coincident link is
-// skipped and reported by its index, and its neighbours are still projected.
+// Coincident ends inside a register of links (a segment of four, and one of eight: one AVX-512
+// register or two AVX2 ones): that register goes link by link, the coincident link is skipped and
+// reported by its index, and its neighbours are still projected, on every path.
 TEST(StretchLinks, CoincidentEndsInsideARegisterGroupAreReportedByIndex) {
-  for (bool simd : {true, false}) {
-    std::vector<DistanceConstraint> list;
-    for (int k = 0; k < 4; ++k) list.push_back({k, k + 4, 1.0});  // contiguous: i = k, j = k + 4
-    Vec3Array x(8, Vec3::Zero());
-    for (int k = 0; k < 4; ++k) {
-      x[k] = Vec3(k * 10.0, 0.0, 0.0);
-      x[k + 4] = Vec3(k * 10.0, 2.0, 0.0);  // every link twice its rest length
+  for (int n : {4, 8}) {
+    for (const SweepPath& path : kSweepPaths) {
+      std::vector<DistanceConstraint> list;
+      for (int k = 0; k < n; ++k) list.push_back({k, k + n, 1.0});  // contiguous: j = i + n
+      Vec3Array x(2 * n, Vec3::Zero());
+      for (int k = 0; k < n; ++k) {
+        x[k] = Vec3(k * 10.0, 0.0, 0.0);
+        x[k + n] = Vec3(k * 10.0, 2.0, 0.0);  // every link twice its rest length
+      }
+      const int coincident = n - 2;
+      x[coincident + n] = x[coincident];
+      std::vector<double> inverse_mass(2 * n, 1.0);
+      StretchLinks links;
+      links.assign(list, 2 * n);
+      ASSERT_EQ(links.segments.size(), 1u);
+      EXPECT_EQ(links.segments[0].layout, StretchLinks::Layout::kContiguous);
+      EXPECT_EQ(links.segments[0].end, n);
+      links.prepareStep(inverse_mass.data(), 0.0);
+      std::vector<double> lambda(n, 0.0);
+      const StretchPassResult result =
+          projectOn(links, 0, links.batchCount(), path.how(), x, lambda.data());
+      EXPECT_EQ(result.degenerate, 1) << path.name << ", " << n;
+      EXPECT_EQ(result.first_degenerate, coincident) << path.name << ", " << n;
+      EXPECT_EQ(lambda[coincident], 0.0);
+      for (int k = 0; k < n; ++k) {
+        if (k == coincident) continue;
+        EXPECT_NEAR((x[k] - x[k + n]).norm(), 1.0, 1e-12)
+            << "link " << k << ", " << path.name << ", " << n;
+      }
+      EXPECT_NEAR(result.max_change, 0.5, 1e-12);  // each end of a link moved by half its excess
     }
-    x[6] = x[2];  // link 2: coincident ends
-    std::vector<double> inverse_mass(8, 1.0);
-    StretchLinks links;
-    links.assign(list, 8);
-    ASSERT_EQ(links.segments.size(), 1u);
-    EXPECT_EQ(links.segments[0].layout, StretchLinks::Layout::kContiguous);
-    links.prepareStep(inverse_mass.data(), 0.0);
-    std::vector<double> lambda(4, 0.0);
-    StretchProjection how;
-    how.simd = simd;
-    const StretchPassResult result = projectOn(links, 0, links.batchCount(), how, x, lambda.data());
-    EXPECT_EQ(result.degenerate, 1);
-    EXPECT_EQ(result.first_degenerate, 2);
-    EXPECT_EQ(lambda[2], 0.0);
-    for (int k : {0, 1, 3}) {
-      EXPECT_NEAR((x[k] - x[k + 4]).norm(), 1.0, 1e-12) << "link " << k << ", simd " << simd;
-    }
-    EXPECT_NEAR(result.max_change, 0.5, 1e-12);  // each end of a link moved by half its excess
   }
 }
 
 // Both diagonals of every other cell of a strip, main then anti per cell (the coarse levels'
-// order): i steps by one, j by one swapped in pairs (kCrossed), and the register path moves every
+// order): i steps by one, j by one swapped in pairs (kCrossed), and the register paths move every
 // particle as the link-by-link loop does, to the bit.
 TEST(StretchLinks, CrossedDiagonalsLoadAsWholeRegisters) {
-  const int cols = 9;  // a 2 x 9 strip: cells 0, 2, 4, 6 of its one row
+  const int cols = 13;  // a 2 x 13 strip: cells 0, 2, ..., 10 of its one row, 12 links
   std::vector<DistanceConstraint> list;
   for (int c = 0; c + 1 < cols; c += 2) {
     list.push_back({c, cols + c + 1, std::sqrt(2.0)});  // main diagonal
@@ -165,7 +195,8 @@ TEST(StretchLinks, CrossedDiagonalsLoadAsWholeRegisters) {
   StretchLinks links;
   links.assign(list, 2 * cols);
   ASSERT_EQ(links.batchCount(), 1);
-  ASSERT_EQ(links.segments.size(), 2u);
+  ASSERT_EQ(links.segments.size(), 2u);  // eight links, then four
+  EXPECT_EQ(links.segments[0].end, 8);
   for (const StretchLinks::Segment& segment : links.segments) {
     EXPECT_EQ(segment.layout, StretchLinks::Layout::kCrossed);
   }
@@ -177,17 +208,16 @@ TEST(StretchLinks, CrossedDiagonalsLoadAsWholeRegisters) {
   std::vector<double> inverse_mass(2 * cols, 1.0);
   inverse_mass[3] = 0.0;  // one kinematic end
   links.prepareStep(inverse_mass.data(), 0.0);
-  Vec3Array result[2] = {start, start};
-  for (bool simd : {true, false}) {
+  Vec3Array result[3] = {start, start, start};
+  for (int path = 0; path < 3; ++path) {
     std::vector<double> lambda(list.size(), 0.0);
-    StretchProjection how;
-    how.simd = simd;
-    projectOn(links, 0, 1, how, result[simd], lambda.data());
+    projectOn(links, 0, 1, kSweepPaths[path].how(), result[path], lambda.data());
   }
-  EXPECT_EQ(result[0], result[1]);
-  EXPECT_EQ(result[1][3], start[3]);
+  EXPECT_EQ(result[0], result[2]) << kSweepPaths[0].name;
+  EXPECT_EQ(result[1], result[2]) << kSweepPaths[1].name;
+  EXPECT_EQ(result[2][3], start[3]);
   for (const DistanceConstraint& link : list) {
-    EXPECT_NEAR((result[1][link.i] - result[1][link.j]).norm(), link.rest_length, 1e-12);
+    EXPECT_NEAR((result[2][link.i] - result[2][link.j]).norm(), link.rest_length, 1e-12);
   }
 }
 
@@ -242,7 +272,7 @@ TEST(StretchLinks, LinksWithoutAFreeEndAreSkipped) {
 // step), on both paths; a stale multiplier read instead of zero changes the positions, and one
 // left unwritten keeps its garbage.
 TEST(StretchLinks, FirstPassWritesTheMultipliersFromZero) {
-  for (bool simd : {true, false}) {
+  for (const SweepPath& path : kSweepPaths) {
     std::vector<DistanceConstraint> list;
     for (int k = 0; k < 4; ++k) list.push_back({k, k + 4, 1.0});   // one register of four
     for (int k = 8; k < 12; ++k) list.push_back({k, k + 4, 1.0});  // four with coincident ends
@@ -257,16 +287,15 @@ TEST(StretchLinks, FirstPassWritesTheMultipliersFromZero) {
     StretchLinks links;
     links.assign(list, 18);
     links.prepareStep(inverse_mass.data(), 0.5);
-    StretchProjection how;
-    how.simd = simd;
+    StretchProjection how = path.how();
     how.alpha = 0.5;
     Vec3Array cleared_x = x, stale_x = x;
     std::vector<double> cleared(list.size(), 0.0), stale(list.size(), 7.0);
     projectOn(links, 0, links.batchCount(), how, cleared_x, cleared.data());
     how.lambda_from_zero = true;
     projectOn(links, 0, links.batchCount(), how, stale_x, stale.data());
-    EXPECT_EQ(stale_x, cleared_x) << "simd " << simd;
-    EXPECT_EQ(stale, cleared) << "simd " << simd;
+    EXPECT_EQ(stale_x, cleared_x) << path.name;
+    EXPECT_EQ(stale, cleared) << path.name;
     EXPECT_NE(cleared[0], 0.0);  // the links did act
     // Reading the stale 7 instead of zero would have moved the ends differently.
     how.lambda_from_zero = false;
@@ -294,7 +323,7 @@ TEST(StretchLinks, RegisterWindowsStayInsideTheirTask) {
       StretchLinks links;
       links.assign(topology.stretch, particles.size(), n, n);
       ASSERT_GT(links.taskCount(), 1);
-      int windows = 0;
+      int in_registers = 0;  // links
       for (int phase = 0; phase < links.phaseCount(); ++phase) {
         std::vector<int> owner(particles.size(), -1);
         auto claim = [&](int first, int count, int task) {
@@ -310,6 +339,7 @@ TEST(StretchLinks, RegisterWindowsStayInsideTheirTask) {
                g < links.batch_segment[links.task_batch[t + 1]]; ++g) {
             const StretchLinks::Segment& segment = links.segments[g];
             const int c = segment.begin;
+            const int width = segment.end - segment.begin;  // 8 or 4 links to a register
             switch (segment.layout) {
               case StretchLinks::Layout::kScalar:
                 for (int k = segment.begin; k < segment.end; ++k) {
@@ -318,26 +348,28 @@ TEST(StretchLinks, RegisterWindowsStayInsideTheirTask) {
                 }
                 break;
               case StretchLinks::Layout::kContiguous:
-                claim(links.i[c], 4, t);
-                claim(links.j[c], 4, t);
+                claim(links.i[c], width, t);
+                claim(links.j[c], width, t);
                 break;
               case StretchLinks::Layout::kCrossed:
-                claim(links.i[c], 4, t);
-                claim(links.j[c + 1], 4, t);
+                claim(links.i[c], width, t);
+                claim(links.j[c + 1], width, t);
                 break;
               case StretchLinks::Layout::kInterleaved:
-                claim(links.i[c], 8, t);
+                claim(links.i[c], 2 * width, t);
                 break;
               case StretchLinks::Layout::kStrided:
-                claim(links.i[c], 8, t);
-                claim(links.j[c], 8, t);
+                claim(links.i[c], 2 * width, t);
+                claim(links.j[c], 2 * width, t);
                 break;
             }
-            windows += segment.layout != StretchLinks::Layout::kScalar;
+            if (segment.layout != StretchLinks::Layout::kScalar) in_registers += width;
           }
         }
       }
-      EXPECT_GT(windows, links.size() / 8) << "diagonals " << diagonals;  // registers still used
+      // Registers still used.
+      EXPECT_GT(in_registers, 0.75 * links.size())
+          << n << " x " << n << ", diagonals " << diagonals;
     }
   }
 }
