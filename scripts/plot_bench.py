@@ -468,6 +468,14 @@ def micro_ns(micro, name):
     return None
 
 
+def micro_label(micro, name):
+    """The path a benchmark ran, from its label: 'projectStretchLinks, AVX-512' -> 'AVX-512'."""
+    for row in micro:
+        if row['name'].replace('/manual_time', '') == name and row.get('label'):
+            return row['label'].split(', ')[-1]
+    return None
+
+
 def issue12_summary(add, data_dir, swinging, swinging100, fabric, towel, micro):
     """Issue 12's targets, each with what this run measured (all from the CSVs of doc/)."""
     add('')
@@ -541,10 +549,13 @@ def issue12_summary(add, data_dir, swinging, swinging100, fabric, towel, micro):
     simd, portable, bare = (micro_ns(micro, 'BM_StretchLinks/simd:1'),
                             micro_ns(micro, 'BM_StretchLinks/simd:0'),
                             micro_ns(micro, 'BM_StretchBareLoop'))
+    avx2 = micro_ns(micro, 'BM_StretchLinks/simd:2')  # AVX2 at most (solver.avx512: false)
     if simd and bare:
+        widest = micro_label(micro, 'BM_StretchLinks/simd:1') or 'SIMD'
         add('| 5 | stretch projection within 1.5x of a bare loop (Google Benchmark pair) | '
-            'AVX2 %.3g ns, portable %.3g ns, bare loop %.3g ns per link: x%.2f and x%.2f | %s |'
-            % (simd, portable or float('nan'), bare, simd / bare,
+            '%s %.3g ns%s, portable %.3g ns, bare loop %.3g ns per link: x%.2f and x%.2f | %s |'
+            % (widest, simd, ', AVX2 %.3g ns' % avx2 if avx2 and avx2 != simd else '',
+               portable or float('nan'), bare, simd / bare,
                (portable or float('nan')) / bare, 'yes' if simd <= 1.5 * bare and
                (portable is None or portable <= 1.5 * bare) else 'no'))
     if towel:

@@ -669,6 +669,8 @@ void positionsToColumns(const double* interleaved, int begin, int end, PositionC
   int p = begin;
 #ifdef PBD_CLOTH_HAVE_AVX2_PATH
   if (simd && stretchLinksUseAvx2()) p = toColumnsAvx2(interleaved, begin, end, columns);
+#else
+  (void)simd;
 #endif
   for (; p < end; ++p) {
     columns.x[p] = interleaved[3 * p];
@@ -682,6 +684,8 @@ void positionsFromColumns(PositionColumns columns, int begin, int end, double* i
   int p = begin;
 #ifdef PBD_CLOTH_HAVE_AVX2_PATH
   if (simd && stretchLinksUseAvx2()) p = fromColumnsAvx2(columns, begin, end, interleaved);
+#else
+  (void)simd;
 #endif
   for (; p < end; ++p) {
     interleaved[3 * p] = columns.x[p];
