@@ -35,6 +35,8 @@ STYLES = [
     ('xpbd jacobi', dict(color='tab:purple', marker='v')),
     ('xpbd + levels', dict(color='darkgreen', marker='h')),
     ('xpbd + levels, interpolated', dict(color='tab:pink', marker='X')),
+    # The same build at solver.avx512=false: four links a register instead of eight.
+    ('xpbd + levels, AVX2 only', dict(color='yellowgreen', marker='h')),
     ('xpbd + levels, chebyshev 0.9', dict(color='gold', marker='d')),
     ('xpbd + levels, chebyshev 0.95', dict(color='darkgoldenrod', marker='d')),
     ('xpbd, chebyshev 0.9', dict(color='tab:gray', marker='d')),
