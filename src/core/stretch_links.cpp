@@ -627,23 +627,21 @@ void StretchLinks::prepareStep(const double* inverse_mass, double alpha) {
   }
 }
 
-bool stretchLinksUseAvx512() {
+// What the processor has, asked once (the answer does not change while the program runs).
 #ifdef PBD_CLOTH_HAVE_AVX2_PATH
+bool stretchLinksUseAvx512() {
   static const bool has_avx512 = __builtin_cpu_supports("avx512f");
   return has_avx512;
-#else
-  return false;
-#endif
 }
 
 bool stretchLinksUseAvx2() {
-#ifdef PBD_CLOTH_HAVE_AVX2_PATH
   static const bool has_avx2 = __builtin_cpu_supports("avx2");
   return has_avx2;
-#else
-  return false;
-#endif
 }
+#else
+bool stretchLinksUseAvx512() { return false; }
+bool stretchLinksUseAvx2() { return false; }
+#endif
 
 StretchPassResult projectStretchLinks(const StretchLinks& links, int first_batch, int end_batch,
                                       const StretchProjection& how, PositionColumns position,
