@@ -6,11 +6,13 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <map>
 #include <sstream>
 #include <string>
+#include <vector>
 
 namespace {
 
@@ -108,6 +110,60 @@ TEST(ClothBench, WritesPositionsAndMeshOfTheFinalState) {
   }
   EXPECT_EQ(vertices, 100);
   EXPECT_EQ(faces, 2 * 9 * 9);
+}
+
+// The structural_max_strain column of --csv, one value a sample row (row 0: t = 0).
+std::vector<double> structuralMaxStrains(const std::string& csv_path) {
+  std::ifstream in(csv_path);
+  std::string line;
+  std::getline(in, line);
+  EXPECT_EQ(line, "t,max_strain,mean_strain,energy,max_penetration,structural_max_strain");
+  std::vector<double> values;
+  while (std::getline(in, line)) values.push_back(std::stod(line.substr(line.rfind(',') + 1)));
+  return values;
+}
+
+double medianOf(std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  const std::size_t n = values.size();
+  return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+// last_second_median_structural_max_strain is the median of the samples of the run's last second:
+// here every step is sampled, so the last 60 of a 2 s run at 60 Hz, and the sample that ends the
+// second before them (rows 60 to 120 of the CSV). A 20 x 20 swinging cloth at few substeps still
+// whips at 2 s, so the whole run's median and the last second's differ, and a wrong window
+// shows. The CSV holds six digits: the tolerance.
+TEST(ClothBench, LastSecondMedianIsTheMedianOfTheLastSecondsSamples) {
+  const std::string csv = ::testing::TempDir() + "bench_last_second.csv";
+  const std::string swinging = std::string(" --config ") + PBD_CLOTH_SOURCE_DIR +
+                               "/config/swinging.yaml --quiet --set cloth.rows=20"
+                               " --set cloth.cols=20 --set 'cloth.pinned=[0,19]'"
+                               " --set cloth.spacing=0.05 --set solver.substeps=4"
+                               " --sample-every 1 --csv " +
+                               csv;
+  BenchRun run = runShell(std::string(CLOTH_BENCH) + swinging + " --duration 2");
+  ASSERT_EQ(run.status, 0) << run.out;
+  const double printed =
+      std::stod(keyValues(run.out).at("last_second_median_structural_max_strain"));
+  std::vector<double> samples = structuralMaxStrains(csv);
+  ASSERT_EQ(samples.size(), 121u);  // t = 0 and 120 steps
+  const double last_second = medianOf(std::vector<double>(samples.begin() + 60, samples.end()));
+  const double whole_run = medianOf(std::vector<double>(samples.begin() + 1, samples.end()));
+  EXPECT_NEAR(printed, last_second, 1e-5 * last_second);
+  EXPECT_GT(std::abs(whole_run - last_second), 1e-3 * last_second) << "the test cannot tell";
+  // The final instant's value is the CSV's last row.
+  EXPECT_NEAR(std::stod(keyValues(run.out).at("final_structural_max_strain")), samples.back(),
+              1e-5 * samples.back());
+
+  // A run shorter than a second: every sample after the start (rows 1 to 30).
+  run = runShell(std::string(CLOTH_BENCH) + swinging + " --duration 0.5");
+  ASSERT_EQ(run.status, 0) << run.out;
+  samples = structuralMaxStrains(csv);
+  ASSERT_EQ(samples.size(), 31u);
+  EXPECT_NEAR(std::stod(keyValues(run.out).at("last_second_median_structural_max_strain")),
+              medianOf(std::vector<double>(samples.begin() + 1, samples.end())),
+              1e-5 * samples.back() + 1e-12);
 }
 
 TEST(ClothBench, RunsAreBitIdentical) {
