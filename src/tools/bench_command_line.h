@@ -181,11 +181,16 @@ class LastSecondStrain {
   }
   // A metric sample taken after `step` steps.
   void add(long long step, const Metrics& m) {
-    if (step >= from_step_) samples_.push_back(m.structural_max_strain);
+    if (step < from_step_) return;
+    // A blown-up cloth has no steady reading: its state is not finite (then its strain can read
+    // 0, a NaN comparing false), or its strain is not (and a NaN would break the sort's order).
+    if (!m.finite || !std::isfinite(m.structural_max_strain)) diverged_ = true;
+    samples_.push_back(m.structural_max_strain);
   }
-  // The median of the samples (the mean of the two middle ones for an even count); NaN if none.
+  // The median of the samples (the mean of the two middle ones for an even count); NaN if none,
+  // or if one was not finite.
   double median() const {
-    if (samples_.empty()) return std::numeric_limits<double>::quiet_NaN();
+    if (samples_.empty() || diverged_) return std::numeric_limits<double>::quiet_NaN();
     std::vector<double> sorted = samples_;
     std::sort(sorted.begin(), sorted.end());
     const std::size_t n = sorted.size();
@@ -195,6 +200,7 @@ class LastSecondStrain {
  private:
   long long from_step_;
   std::vector<double> samples_;
+  bool diverged_ = false;
 };
 
 // main() of both tools: the exit status of run(), or what it threw as a message that names the

@@ -166,6 +166,20 @@ TEST(ClothBench, LastSecondMedianIsTheMedianOfTheLastSecondsSamples) {
               1e-5 * samples.back() + 1e-12);
 }
 
+// A cloth that blows up inside the window has no steady strain: NaN, though its last sample's
+// strain reads 0 (NaN positions compare false). An explicit mass-spring cloth, one substep of a
+// 60 Hz step at a stiffness far past its limit, is not finite after about 36 steps.
+TEST(ClothBench, LastSecondMedianOfABlownUpClothIsNaN) {
+  const BenchRun run = runBench("--duration 0.9 --sample-every 1" + kSmall +
+                                " --set solver.method=mass_spring --set solver.substeps=1"
+                                " --set solver.spring_stiffness=100000");
+  ASSERT_EQ(run.status, 0) << run.out;
+  const auto values = keyValues(run.out);
+  ASSERT_EQ(values.at("finite"), "0") << "the run must blow up for this test: " << run.out;
+  EXPECT_LT(std::stoi(values.at("steps")), 54) << "inside the run's 54 steps";
+  EXPECT_EQ(values.at("last_second_median_structural_max_strain"), "nan") << run.out;
+}
+
 TEST(ClothBench, RunsAreBitIdentical) {
   const std::string a = ::testing::TempDir() + "bench_a.csv";
   const std::string b = ::testing::TempDir() + "bench_b.csv";
