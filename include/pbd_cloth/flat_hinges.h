@@ -4,11 +4,12 @@
 // al. 2016, eq. 18) dlambda = (-k C - alpha~ lambda) / (w + alpha~), w = scale^2 sum_k w_k K_k^2,
 // and each corner moved by w_k K_k scale dlambda.
 //
-// Why a file of its own: the hinge's three coordinates go through one AVX2 register (x y z and an
-// unused lane), a third of the scalar loop's arithmetic. As for the stretch links
-// (stretch_links.h), the AVX2 path is chosen at run time where the processor has it, any other
-// runs the portable loop, and the file is compiled without floating-point contraction, so both
-// give the same result to the bit (test_core: FlatHinges.*).
+// Why a file of its own: the hinge's three coordinates go through one 256-bit register (x y z and
+// an unused lane), a third of the scalar loop's arithmetic. As for the stretch links
+// (stretch_links.h), the path is chosen at run time: AVX-512VL (masked loads and stores of x y z)
+// where the processor has it, else AVX2, else the portable loop; the file is compiled without
+// floating-point contraction, so all three give the same result to the bit (test_core:
+// FlatHinges.*).
 #pragma once
 
 #include "pbd_cloth/particles.h"
@@ -36,8 +37,8 @@ struct FlatHinge {
 // whose multipliers start at zero: they are written, not read, so nobody need zero them first).
 // Returns the largest corner move (m) when track_change (only solver.tolerance's adaptive count
 // reads it), else 0 without computing it. simd false: the portable loop even where AVX2 is
-// there. Allocates nothing.
+// there; avx512 false: AVX2 even where AVX-512VL is there (solver.avx512). Allocates nothing.
 double projectFlatHinges(const FlatHinge* hinge, int count, bool lambda_from_zero,
-                         bool track_change, bool simd, double* x, double* lambda);
+                         bool track_change, bool simd, bool avx512, double* x, double* lambda);
 
 }  // namespace pbd_cloth

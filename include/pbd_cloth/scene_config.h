@@ -103,8 +103,9 @@ struct SolverConfig {
   // eight at a time with AVX-512 where it has that (stretch_links.h; bit-identical to the
   // portable loop). false: always the portable loop.
   bool simd = true;
-  // solver.avx512: false keeps the stretch links at AVX2 on a processor with AVX-512 (the same
-  // results to the bit; for comparing the two, doc/performance.md "Eight links a register").
+  // solver.avx512: false keeps the stretch links and the flat hinges at AVX2 on a processor with
+  // AVX-512 (the same results to the bit; for comparing the two, doc/performance.md "Eight links
+  // a register" and "Flat hinges through masked accesses").
   bool avx512 = true;
   // solver.threads: threads that step the cloth (the calling one included): the stretch links of
   // a grid of 32 rows or more in blocks (stretch_links.h), prediction and velocity update in

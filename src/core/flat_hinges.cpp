@@ -52,76 +52,132 @@ double projectPortable(const FlatHinge* hinge, int count, bool lambda_from_zero,
 
 #ifdef PBD_CLOTH_HAVE_AVX2_PATH
 #define PBD_AVX2 __attribute__((target("avx2")))
+#define PBD_AVX512VL __attribute__((target("avx512f,avx512vl")))
 
-// x y z of one particle in lanes 0-2 (lane 3 zero): a 16-byte and an 8-byte access, never the
-// double after z (the last particle of the array is safe). Masked loads and stores would do the
-// same, at several times the cost on some processors (measured here: slower than scalar code).
-PBD_AVX2 inline __m256d loadXyz(const double* p) {
-  return _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(p)), _mm_load_sd(p + 2), 1);
-}
+// How a register takes one particle's x y z (lane 3 zero) and a hinge's setting: the two
+// instruction sets differ only here. Neither reads or writes the double after z, so the last
+// particle of the array is safe.
+// AVX2: a 16-byte and an 8-byte access. Its masked loads and stores would do the same, at
+// several times the cost on some processors (measured here: slower than scalar code).
+// (Registers pass by reference: a function that takes or returns one by value, compiled without
+// AVX, would have another calling convention; GCC warns of it, -Wpsabi.)
+struct Avx2Xyz {
+  PBD_AVX2 static void load(const double* p, __m256d& v) {
+    v = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(p)), _mm_load_sd(p + 2), 1);
+  }
+  PBD_AVX2 static void store(double* p, const __m256d& v) {
+    _mm_storeu_pd(p, _mm256_castpd256_pd128(v));
+    _mm_store_sd(p + 2, _mm256_extractf128_pd(v, 1));
+  }
+  PBD_AVX2 static void loadLambda(const double* p, __m256d& v) { load(p, v); }
+  PBD_AVX2 static void storeLambda(double* p, const __m256d& v) { store(p, v); }
+  PBD_AVX2 static void broadcast(double value, __m256d& v) { v = _mm256_set1_pd(value); }
+  PBD_AVX2 static double squaredNorm(const __m256d& v) {
+    alignas(32) double d[4];
+    _mm256_store_pd(d, v);
+    return (d[0] * d[0] + d[1] * d[1]) + d[2] * d[2];
+  }
+};
 
-PBD_AVX2 inline void storeXyz(double* p, __m256d v) {
-  _mm_storeu_pd(p, _mm256_castpd256_pd128(v));
-  _mm_store_sd(p + 2, _mm256_extractf128_pd(v, 1));
-}
+// AVX-512VL: one masked access of three lanes each way, where AVX2 needs two and a shuffle. The
+// pass reads 4 corners and writes 4 a hinge, and those accesses, not its arithmetic, bound it
+// (doc/performance.md, "Flat hinges through masked accesses").
+struct Avx512VlXyz {
+  static constexpr __mmask8 kXyz = 0x7;
+  PBD_AVX512VL static void load(const double* p, __m256d& v) { v = _mm256_maskz_loadu_pd(kXyz, p); }
+  PBD_AVX512VL static void store(double* p, const __m256d& v) { _mm256_mask_storeu_pd(p, kXyz, v); }
+  // A hinge's multipliers, three doubles each, lie back to back: a masked store spans the next
+  // hinge's first one, and a masked load of that is then held until the store has left (the
+  // pass at more than one iteration took twice AVX2's time). The two exact accesses instead.
+  PBD_AVX512VL static void loadLambda(const double* p, __m256d& v) { Avx2Xyz::load(p, v); }
+  PBD_AVX512VL static void storeLambda(double* p, const __m256d& v) { Avx2Xyz::store(p, v); }
+  PBD_AVX512VL static void broadcast(double value, __m256d& v) { v = _mm256_set1_pd(value); }
+  PBD_AVX512VL static double squaredNorm(const __m256d& v) { return Avx2Xyz::squaredNorm(v); }
+};
 
-PBD_AVX2 double projectAvx2(const FlatHinge* hinge, int count, bool lambda_from_zero,
+// projectPortable's arithmetic with a hinge's three coordinates in the lanes of one register, in
+// the same operations and order (GCC's vector operators, compiled to the caller's instruction
+// set: no contraction into fused multiply-adds, so the same roundings and the same bits).
+template <class A>
+inline double projectHinges(const FlatHinge* hinge, int count, bool lambda_from_zero,
                             bool track_change, double* x, double* lambda) {
   double largest_sq = 0.0;
+  __m256d zero, gain[3], decay, move[4];
+  A::broadcast(0.0, zero);
   for (int c = 0; c < count; ++c) {
     const FlatHinge& h = hinge[c];
     double* hinge_lambda = lambda + 3 * c;
     if (h.largest_move == 0.0) {
-      if (lambda_from_zero) storeXyz(hinge_lambda, _mm256_setzero_pd());
+      if (lambda_from_zero) A::storeLambda(hinge_lambda, zero);
       continue;
     }
     double* corner[4] = {x + 3 * h.index[0], x + 3 * h.index[1], x + 3 * h.index[2],
                          x + 3 * h.index[3]};
     // Four different particles (flat_hinges.h): each read once, moved from what was read.
-    const __m256d x0 = loadXyz(corner[0]);
-    const __m256d x1 = loadXyz(corner[1]);
-    const __m256d x2 = loadXyz(corner[2]);
-    const __m256d x3 = loadXyz(corner[3]);
-    const __m256d sum = _mm256_add_pd(
-        _mm256_add_pd(_mm256_mul_pd(_mm256_set1_pd(h.gain[0]), _mm256_sub_pd(x1, x0)),
-                      _mm256_mul_pd(_mm256_set1_pd(h.gain[1]), _mm256_sub_pd(x2, x0))),
-        _mm256_mul_pd(_mm256_set1_pd(h.gain[2]), _mm256_sub_pd(x3, x0)));
+    __m256d x0, x1, x2, x3;
+    A::load(corner[0], x0);
+    A::load(corner[1], x1);
+    A::load(corner[2], x2);
+    A::load(corner[3], x3);
+    for (int k = 0; k < 3; ++k) A::broadcast(h.gain[k], gain[k]);
+    for (int k = 0; k < 4; ++k) A::broadcast(h.move[k], move[k]);
+    const __m256d sum = (gain[0] * (x1 - x0) + gain[1] * (x2 - x0)) + gain[2] * (x3 - x0);
     __m256d dlambda = sum;
     if (lambda_from_zero) {
-      storeXyz(hinge_lambda, sum);
+      A::storeLambda(hinge_lambda, sum);
     } else {
-      const __m256d old_lambda = loadXyz(hinge_lambda);
-      dlambda = _mm256_sub_pd(sum, _mm256_mul_pd(_mm256_set1_pd(h.decay), old_lambda));
-      storeXyz(hinge_lambda, _mm256_add_pd(old_lambda, dlambda));
+      __m256d old_lambda;
+      A::loadLambda(hinge_lambda, old_lambda);
+      A::broadcast(h.decay, decay);
+      dlambda = sum - decay * old_lambda;
+      A::storeLambda(hinge_lambda, old_lambda + dlambda);
     }
-    storeXyz(corner[0], _mm256_add_pd(x0, _mm256_mul_pd(_mm256_set1_pd(h.move[0]), dlambda)));
-    storeXyz(corner[1], _mm256_add_pd(x1, _mm256_mul_pd(_mm256_set1_pd(h.move[1]), dlambda)));
-    storeXyz(corner[2], _mm256_add_pd(x2, _mm256_mul_pd(_mm256_set1_pd(h.move[2]), dlambda)));
-    storeXyz(corner[3], _mm256_add_pd(x3, _mm256_mul_pd(_mm256_set1_pd(h.move[3]), dlambda)));
+    A::store(corner[0], x0 + move[0] * dlambda);
+    A::store(corner[1], x1 + move[1] * dlambda);
+    A::store(corner[2], x2 + move[2] * dlambda);
+    A::store(corner[3], x3 + move[3] * dlambda);
     if (track_change) {
-      alignas(32) double d[4];
-      _mm256_store_pd(d, dlambda);
-      const double dlambda_sq = (d[0] * d[0] + d[1] * d[1]) + d[2] * d[2];
-      largest_sq = std::max(largest_sq, h.largest_move * h.largest_move * dlambda_sq);
+      largest_sq = std::max(largest_sq, h.largest_move * h.largest_move * A::squaredNorm(dlambda));
     }
   }
   return largest_sq;
+}
+
+__attribute__((flatten)) PBD_AVX2 double projectAvx2(const FlatHinge* hinge, int count,
+                                                     bool lambda_from_zero, bool track_change,
+                                                     double* x, double* lambda) {
+  return projectHinges<Avx2Xyz>(hinge, count, lambda_from_zero, track_change, x, lambda);
+}
+
+__attribute__((flatten)) PBD_AVX512VL double projectAvx512Vl(const FlatHinge* hinge, int count,
+                                                             bool lambda_from_zero,
+                                                             bool track_change, double* x,
+                                                             double* lambda) {
+  return projectHinges<Avx512VlXyz>(hinge, count, lambda_from_zero, track_change, x, lambda);
+}
+
+bool hasAvx512Vl() {
+  static const bool has = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
+  return has;
 }
 #endif
 
 }  // namespace
 
 double projectFlatHinges(const FlatHinge* hinge, int count, bool lambda_from_zero,
-                         bool track_change, bool simd, double* x, double* lambda) {
+                         bool track_change, bool simd, bool avx512, double* x, double* lambda) {
   double largest_sq = 0.0;
 #ifdef PBD_CLOTH_HAVE_AVX2_PATH
-  if (simd && stretchLinksUseAvx2()) {
+  if (simd && avx512 && hasAvx512Vl()) {
+    largest_sq = projectAvx512Vl(hinge, count, lambda_from_zero, track_change, x, lambda);
+  } else if (simd && stretchLinksUseAvx2()) {
     largest_sq = projectAvx2(hinge, count, lambda_from_zero, track_change, x, lambda);
   } else {
     largest_sq = projectPortable(hinge, count, lambda_from_zero, track_change, x, lambda);
   }
 #else
   (void)simd;
+  (void)avx512;
   largest_sq = projectPortable(hinge, count, lambda_from_zero, track_change, x, lambda);
 #endif
   return std::sqrt(largest_sq);

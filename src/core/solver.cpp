@@ -493,7 +493,7 @@ double Solver::projectFlatBend(Particles& p, const ClothTopology& topology, bool
   // Hinges [begin, end) in order.
   auto sweep = [&](int begin, int end) {
     return projectFlatHinges(flat_hinges_.data() + begin, end - begin, first_pass, track_change,
-                             config_.simd, x,
+                             config_.simd, config_.avx512, x,
                              bend_lambda_.front().data() + 3 * static_cast<std::size_t>(begin));
   };
   const int threads = pool_.threads();

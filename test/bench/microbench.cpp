@@ -30,6 +30,7 @@
 #include "pbd_cloth/cloth_builder.h"
 #include "pbd_cloth/collisions.h"
 #include "pbd_cloth/depth_camera.h"
+#include "pbd_cloth/flat_hinges.h"
 #include "pbd_cloth/scene_assets.h"
 #include "pbd_cloth/scene_yaml.h"
 #include "pbd_cloth/simulation.h"
@@ -338,6 +339,53 @@ void BM_BendProjection(benchmark::State& state) {
   }
   setCounters(state, static_cast<double>(with.topology.bend.size()), difference, projections);
   state.SetLabel(std::string(toString(method)) + ": per bending projection");
+}
+
+// ns per flat hinge projection (flat_hinges.h) on each path, the pass alone: the 50 x 50 cloth of
+// config/fabric_table.yaml (bending on, zero compliance here), its hinges in the solver's sweep
+// order with what Solver::prepareBendStep fixes for them, positions bent by a swinging start.
+// path 0: portable loop, 1: AVX-512VL where the processor has it (else AVX2), 2: AVX2; first 1:
+// each pass a substep's first (its multipliers written, not read: solver.iterations 1), 0: a later
+// iteration's.
+void BM_FlatHinges(benchmark::State& state) {
+  SceneConfig scene = clothScene(Method::kXpbd, 1, true);
+  scene.cloth.rows = scene.cloth.cols = 50;
+  scene.cloth.spacing = 0.02;
+  scene.cloth.pinned = {0, 49};
+  scene.cloth.bend_compliance = 0.0;
+  scene.cloth.rpy = Eigen::Vector3d::Zero();  // flat at the start, so it bends as it swings
+  SolverRig rig(scene);
+  for (int step = 0; step < 30; ++step) rig.timedStep();  // a bent, swinging state
+  const auto& bend = rig.topology.bend;
+  std::vector<FlatHinge> hinge(bend.size());
+  for (std::size_t c = 0; c < bend.size(); ++c) {  // flat_hinges.h, at zero compliance (k = 1)
+    double w = 0.0;
+    for (int v = 0; v < 4; ++v) {
+      const double inverse_mass = rig.particles.inverse_mass[bend[c].index[v]];
+      hinge[c].index[v] = bend[c].index[v];
+      hinge[c].move[v] = inverse_mass * bend[c].weight[v] * bend[c].scale;
+      hinge[c].largest_move = std::max(hinge[c].largest_move, std::abs(hinge[c].move[v]));
+      w += inverse_mass * bend[c].weight[v] * bend[c].weight[v];
+    }
+    w *= bend[c].scale * bend[c].scale;
+    for (int v = 0; v < 3; ++v) hinge[c].gain[v] = -bend[c].scale * bend[c].weight[v + 1] / w;
+  }
+  const bool simd = state.range(0) != 0, avx512 = state.range(0) != 2, first = state.range(1) != 0;
+  std::vector<double> lambda(3 * bend.size(), 0.0);
+  double* x = rig.particles.position.front().data();
+  double total = 0.0;
+  for (auto _ : state) {
+    const Clock::time_point start = Clock::now();
+    benchmark::DoNotOptimize(projectFlatHinges(hinge.data(), static_cast<int>(hinge.size()), first,
+                                               false, simd, avx512, x, lambda.data()));
+    benchmark::ClobberMemory();
+    total += secondsSince(start);
+  }
+  setCounters(state, static_cast<double>(hinge.size()), total, static_cast<double>(hinge.size()));
+  const bool has_avx512 = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
+  state.SetLabel(!simd || !stretchLinksUseAvx2() ? "projectFlatHinges, portable"
+                 : avx512 && has_avx512          ? "projectFlatHinges, AVX-512VL"
+                                                 : "projectFlatHinges, AVX2");
 }
 
 // Contacts of one scene: the broad phase once, then timed passes of Collisions::project from the
@@ -693,6 +741,10 @@ BENCHMARK(BM_StretchLinks)->ArgName("simd")->Arg(1)->Arg(0)->Arg(2)->Unit(benchm
 BENCHMARK(BM_StretchBareLoop)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_DirectFactorize)->ArgName("rows")->Arg(50)->Arg(100)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_DirectSolve)->ArgName("rows")->Arg(50)->Arg(100)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_FlatHinges)
+    ->ArgNames({"path", "first"})
+    ->ArgsProduct({{1, 2, 0}, {1, 0}})
+    ->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_BendProjection)
     ->ArgNames({"method", "passes"})
     ->Args({kXpbd, 10})

@@ -15,25 +15,30 @@
 namespace pbd_cloth {
 namespace {
 
-// A 20 x 20 cloth with bending swinging from two corners for 3 s, twice: AVX2 (where this
-// processor has it) and the portable loop end in the same positions, bit for bit.
-TEST(FlatHinges, Avx2AndPortablePathsAgreeToTheBit) {
+// A 20 x 20 cloth with bending swinging from two corners for 3 s, three times: AVX-512VL and
+// AVX2 (each where this processor has it) and the portable loop end in the same positions, bit
+// for bit.
+TEST(FlatHinges, Avx512Avx2AndPortablePathsAgreeToTheBit) {
   if (!stretchLinksUseAvx2()) GTEST_SKIP() << "no AVX2 here: only the portable path runs";
   for (double bend_compliance : {0.0, 1e-3}) {
     SceneConfig scene = test::clothScene(20, 20, 0.05, Method::kXpbd);
     scene.cloth.bend_compliance = bend_compliance;
     scene.cloth.self_collision = false;
     scene.cloth.pinned = {0, 19};
-    SceneConfig portable = scene;
+    SceneConfig portable = scene, avx2 = scene;
     portable.solver.simd = false;
-    Simulation with_simd(scene), without(portable);
+    avx2.solver.avx512 = false;
+    Simulation with_simd(scene), with_avx2(avx2), without(portable);
     ASSERT_GT(with_simd.topology().bend.size(), 0u);
     const Vec3 corner_start = with_simd.particles().position[399];
     for (int step = 0; step < 180; ++step) {
       with_simd.step();
+      with_avx2.step();
       without.step();
     }
     EXPECT_EQ(with_simd.particles().position, without.particles().position)
+        << "bend compliance " << bend_compliance;
+    EXPECT_EQ(with_avx2.particles().position, without.particles().position)
         << "bend compliance " << bend_compliance;
     EXPECT_GT((with_simd.particles().position[399] - corner_start).norm(), 0.2);
   }
@@ -109,15 +114,18 @@ TEST(FlatHinges, OneProjectionFlattensAHingeAtTheEndOfTheArray) {
   }
   w *= hinge.scale * hinge.scale;
   for (int v = 0; v < 3; ++v) step.gain[v] = -hinge.scale * hinge.weight[v + 1] / w;
-  std::vector<double> result[2];
-  for (bool simd : {false, true}) {
+  // The three paths: portable, AVX2, AVX-512VL (each where this processor has it).
+  std::vector<double> result[3];
+  for (int path = 0; path < 3; ++path) {
+    const bool simd = path > 0, avx512 = path == 2;
     std::vector<double> x = start, lambda(3, 0.0);
-    const double moved = projectFlatHinges(&step, 1, false, true, simd, x.data(), lambda.data());
+    const double moved =
+        projectFlatHinges(&step, 1, false, true, simd, avx512, x.data(), lambda.data());
     EXPECT_GT(moved, 0.01);
     for (int d = 0; d < 3; ++d) {
       double b = 0.0;
       for (int v = 0; v < 4; ++v) b += hinge.weight[v] * x[3 * hinge.index[v] + d];
-      EXPECT_NEAR(b, 0.0, 1e-12) << "coordinate " << d << ", simd " << simd;
+      EXPECT_NEAR(b, 0.0, 1e-12) << "coordinate " << d << ", path " << path;
       EXPECT_EQ(x[d], 9.0);  // particle 0 is no corner
     }
     // The largest move it reports is the largest corner's.
@@ -128,18 +136,19 @@ TEST(FlatHinges, OneProjectionFlattensAHingeAtTheEndOfTheArray) {
         sq += (x[3 * i + d] - start[3 * i + d]) * (x[3 * i + d] - start[3 * i + d]);
       largest = std::max(largest, std::sqrt(sq));
     }
-    EXPECT_NEAR(moved, largest, 1e-12 * largest) << "simd " << simd;
+    EXPECT_NEAR(moved, largest, 1e-12 * largest) << "path " << path;
     // Untracked, and with the multipliers written instead of read (a substep's first pass, over
     // a stale value): the same positions and multipliers, and no change reported.
     std::vector<double> untracked = start, untracked_lambda(3, 7.0);
-    EXPECT_EQ(
-        projectFlatHinges(&step, 1, true, false, simd, untracked.data(), untracked_lambda.data()),
-        0.0);
+    EXPECT_EQ(projectFlatHinges(&step, 1, true, false, simd, avx512, untracked.data(),
+                                untracked_lambda.data()),
+              0.0);
     EXPECT_EQ(untracked, x);
     EXPECT_EQ(untracked_lambda, lambda);
-    result[simd] = x;
+    result[path] = x;
   }
   EXPECT_EQ(result[0], result[1]);
+  EXPECT_EQ(result[0], result[2]);
 }
 
 // A rope (one row: no triangles, no hinges) with bending on steps on both paths: no hinge to
