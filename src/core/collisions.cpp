@@ -50,7 +50,8 @@ bool outsideBounds(const Vec3& x, double r, const Vec3& lo, const Vec3& hi) {
 // The box of a particle's path over the substep, from `start` to x, grown by its radius r: what
 // the obstacles' cull tests, for one particle and for a block of them alike (the same arithmetic,
 // so a block's box holds each of its particles' boxes to the last bit).
-void pathBox(const Vec3& x, const Vec3& start, double r, Eigen::Array3d& lo, Eigen::Array3d& hi) {
+inline void pathBox(const Vec3& x, const Vec3& start, double r, Eigen::Array3d& lo,
+                    Eigen::Array3d& hi) {
   lo = x.cwiseMin(start).array() - r;
   hi = x.cwiseMax(start).array() + r;
 }
@@ -548,7 +549,9 @@ double Collisions::projectBlockFirstPass(Particles& p, int begin, int end, int* 
     Eigen::Array3d& particle_lo = box[i - begin][0];
     Eigen::Array3d& particle_hi = box[i - begin][1];
     pathBox(p.position[i], p.substep_start[i], p.radius[i], particle_lo, particle_hi);
-    every = every || !(particle_lo <= particle_hi).all();
+    // (Bitwise, not short-circuit: no branch per particle.)
+    every |= !(particle_lo[0] <= particle_hi[0]) | !(particle_lo[1] <= particle_hi[1]) |
+             !(particle_lo[2] <= particle_hi[2]);
     lo = lo.min(particle_lo);
     hi = hi.max(particle_hi);
   }
