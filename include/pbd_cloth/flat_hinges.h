@@ -41,4 +41,8 @@ struct FlatHinge {
 double projectFlatHinges(const FlatHinge* hinge, int count, bool lambda_from_zero,
                          bool track_change, bool simd, bool avx512, double* x, double* lambda);
 
+// True where the processor has AVX-512F and AVX-512VL: projectFlatHinges then takes the masked
+// path when simd and avx512 are set (AVX2, stretchLinksUseAvx2, otherwise).
+bool flatHingesUseAvx512Vl();
+
 }  // namespace pbd_cloth

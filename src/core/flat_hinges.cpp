@@ -80,8 +80,8 @@ struct Avx2Xyz {
 };
 
 // AVX-512VL: one masked access of three lanes each way, where AVX2 needs two and a shuffle. The
-// pass reads 4 corners and writes 4 a hinge, and those accesses, not its arithmetic, bound it
-// (doc/performance.md, "Flat hinges through masked accesses").
+// pass reads 4 corners and writes 4 a hinge, and those accesses and the instructions around them,
+// not its arithmetic, bound it (doc/performance.md, "Flat hinges through masked accesses").
 struct Avx512VlXyz {
   static constexpr __mmask8 kXyz = 0x7;
   PBD_AVX512VL static void load(const double* p, __m256d& v) { v = _mm256_maskz_loadu_pd(kXyz, p); }
@@ -155,20 +155,24 @@ __attribute__((flatten)) PBD_AVX512VL double projectAvx512Vl(const FlatHinge* hi
                                                              double* lambda) {
   return projectHinges<Avx512VlXyz>(hinge, count, lambda_from_zero, track_change, x, lambda);
 }
-
-bool hasAvx512Vl() {
-  static const bool has = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
-  return has;
-}
 #endif
 
 }  // namespace
+
+#ifdef PBD_CLOTH_HAVE_AVX2_PATH
+bool flatHingesUseAvx512Vl() {
+  static const bool has = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
+  return has;
+}
+#else
+bool flatHingesUseAvx512Vl() { return false; }
+#endif
 
 double projectFlatHinges(const FlatHinge* hinge, int count, bool lambda_from_zero,
                          bool track_change, bool simd, bool avx512, double* x, double* lambda) {
   double largest_sq = 0.0;
 #ifdef PBD_CLOTH_HAVE_AVX2_PATH
-  if (simd && avx512 && hasAvx512Vl()) {
+  if (simd && avx512 && flatHingesUseAvx512Vl()) {
     largest_sq = projectAvx512Vl(hinge, count, lambda_from_zero, track_change, x, lambda);
   } else if (simd && stretchLinksUseAvx2()) {
     largest_sq = projectAvx2(hinge, count, lambda_from_zero, track_change, x, lambda);

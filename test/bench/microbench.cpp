@@ -341,9 +341,9 @@ void BM_BendProjection(benchmark::State& state) {
   state.SetLabel(std::string(toString(method)) + ": per bending projection");
 }
 
-// ns per flat hinge projection (flat_hinges.h) on each path, the pass alone: the 50 x 50 cloth of
-// config/fabric_table.yaml (bending on, zero compliance here), its hinges in the solver's sweep
-// order with what Solver::prepareBendStep fixes for them, positions bent by a swinging start.
+// ns per flat hinge projection (flat_hinges.h) on each path, the pass alone: a 50 x 50 cloth at
+// config/fabric_table.yaml's spacing (bending on, zero compliance here), its hinges in the solver's
+// sweep order with what Solver::prepareBendStep fixes for them, positions bent by a swinging start.
 // path 0: portable loop, 1: AVX-512VL where the processor has it (else AVX2), 2: AVX2; first 1:
 // each pass a substep's first (its multipliers written, not read: solver.iterations 1), 0: a later
 // iteration's.
@@ -382,10 +382,9 @@ void BM_FlatHinges(benchmark::State& state) {
     total += secondsSince(start);
   }
   setCounters(state, static_cast<double>(hinge.size()), total, static_cast<double>(hinge.size()));
-  const bool has_avx512 = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
-  state.SetLabel(!simd || !stretchLinksUseAvx2() ? "projectFlatHinges, portable"
-                 : avx512 && has_avx512          ? "projectFlatHinges, AVX-512VL"
-                                                 : "projectFlatHinges, AVX2");
+  state.SetLabel(!simd || !stretchLinksUseAvx2()     ? "projectFlatHinges, portable"
+                 : avx512 && flatHingesUseAvx512Vl() ? "projectFlatHinges, AVX-512VL"
+                                                     : "projectFlatHinges, AVX2");
 }
 
 // Contacts of one scene: the broad phase once, then timed passes of Collisions::project from the
