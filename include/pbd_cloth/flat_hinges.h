@@ -32,6 +32,14 @@ struct FlatHinge {
   double largest_move = 0.0;
 };
 
+// What a step fixes for the flat hinge `con` (the formulas above): inverse_mass the particles'
+// inverse masses, alpha = alpha~ (XPBD's compliance / h^2; 0 for PBD), k the stiffness factor (1
+// for XPBD). A hinge whose w is below min_weight has no free corner: it comes back skipped
+// (largest_move 0). Solver::prepareBendStep makes every hinge's with it; so does the
+// microbenchmark that times the pass.
+FlatHinge makeFlatHinge(const BendConstraint& con, const double* inverse_mass, double alpha,
+                        double k, double min_weight);
+
 // One Gauss-Seidel sweep over hinges [0, count) in order: x the positions (x0 y0 z0 x1 ...),
 // lambda three multipliers per hinge (accumulated; lambda_from_zero: the substep's first pass,
 // whose multipliers start at zero: they are written, not read, so nobody need zero them first).

@@ -168,6 +168,27 @@ bool flatHingesUseAvx512Vl() {
 bool flatHingesUseAvx512Vl() { return false; }
 #endif
 
+FlatHinge makeFlatHinge(const BendConstraint& con, const double* inverse_mass, double alpha,
+                        double k, double min_weight) {
+  FlatHinge hinge;
+  double w = 0.0, largest = 0.0;
+  for (int v = 0; v < 4; ++v) {
+    const double wv = inverse_mass[con.index[v]];
+    w += wv * con.weight[v] * con.weight[v];
+    hinge.index[v] = con.index[v];
+    hinge.move[v] = wv * con.weight[v] * con.scale;
+    largest = std::max(largest, std::abs(hinge.move[v]));
+  }
+  w *= con.scale * con.scale;
+  if (w < min_weight) return FlatHinge();  // no free corner: skipped (largest_move 0)
+  const double inverse_denominator = 1.0 / (w + alpha);
+  for (int v = 0; v < 3; ++v)
+    hinge.gain[v] = -k * con.scale * con.weight[v + 1] * inverse_denominator;
+  hinge.decay = alpha * inverse_denominator;
+  hinge.largest_move = largest;
+  return hinge;
+}
+
 double projectFlatHinges(const FlatHinge* hinge, int count, bool lambda_from_zero,
                          bool track_change, bool simd, bool avx512, double* x, double* lambda) {
   double largest_sq = 0.0;

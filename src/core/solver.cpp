@@ -525,26 +525,8 @@ void Solver::prepareBendStep(const Particles& p, const ClothTopology& topology, 
   const double alpha = xpbd ? bend_compliance_ / (h * h) : 0.0;
   const double k = xpbd ? 1.0 : pbdStiffness(config_.bend_stiffness);
   for (int c = 0; c < count; ++c) {
-    const BendConstraint& con = topology.bend[c];
-    FlatHinge& hinge = flat_hinges_[c];
-    double w = 0.0, largest = 0.0;
-    for (int v = 0; v < 4; ++v) {
-      const double wv = p.inverse_mass[con.index[v]];
-      w += wv * con.weight[v] * con.weight[v];
-      hinge.index[v] = con.index[v];
-      hinge.move[v] = wv * con.weight[v] * con.scale;
-      largest = std::max(largest, std::abs(hinge.move[v]));
-    }
-    w *= con.scale * con.scale;
-    if (w < kMinInverseMass) {
-      hinge = FlatHinge();  // no free corner: skipped (largest_move 0)
-      continue;
-    }
-    const double inverse_denominator = 1.0 / (w + alpha);
-    for (int v = 0; v < 3; ++v)
-      hinge.gain[v] = -k * con.scale * con.weight[v + 1] * inverse_denominator;
-    hinge.decay = alpha * inverse_denominator;
-    hinge.largest_move = largest;
+    flat_hinges_[c] =
+        makeFlatHinge(topology.bend[c], p.inverse_mass.data(), alpha, k, kMinInverseMass);
   }
 }
 

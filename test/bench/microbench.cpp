@@ -358,17 +358,8 @@ void BM_FlatHinges(benchmark::State& state) {
   for (int step = 0; step < 30; ++step) rig.timedStep();  // a bent, swinging state
   const auto& bend = rig.topology.bend;
   std::vector<FlatHinge> hinge(bend.size());
-  for (std::size_t c = 0; c < bend.size(); ++c) {  // flat_hinges.h, at zero compliance (k = 1)
-    double w = 0.0;
-    for (int v = 0; v < 4; ++v) {
-      const double inverse_mass = rig.particles.inverse_mass[bend[c].index[v]];
-      hinge[c].index[v] = bend[c].index[v];
-      hinge[c].move[v] = inverse_mass * bend[c].weight[v] * bend[c].scale;
-      hinge[c].largest_move = std::max(hinge[c].largest_move, std::abs(hinge[c].move[v]));
-      w += inverse_mass * bend[c].weight[v] * bend[c].weight[v];
-    }
-    w *= bend[c].scale * bend[c].scale;
-    for (int v = 0; v < 3; ++v) hinge[c].gain[v] = -bend[c].scale * bend[c].weight[v + 1] / w;
+  for (std::size_t c = 0; c < bend.size(); ++c) {  // at zero compliance (alpha~ 0, k 1)
+    hinge[c] = makeFlatHinge(bend[c], rig.particles.inverse_mass.data(), 0.0, 1.0, 1e-300);
   }
   const bool simd = state.range(0) != 0, avx512 = state.range(0) != 2, first = state.range(1) != 0;
   std::vector<double> lambda(3 * bend.size(), 0.0);
