@@ -66,6 +66,7 @@
 #include "pbd_cloth/contact.h"
 #include "pbd_cloth/particle_contacts.h"
 #include "pbd_cloth/particles.h"
+#include "pbd_cloth/path_boxes.h"
 #include "pbd_cloth/scene_config.h"
 #include "pbd_cloth/self_collision.h"
 #include "pbd_cloth/shapes.h"
@@ -289,6 +290,9 @@ class Collisions {
   double thread_max_change_[kMaxThreads] = {};
   // projectBlockFirstPass's lists, one of obstacles_.size() entries for each thread.
   std::vector<int> near_obstacles_;
+  // The loop that computes a block's path boxes (path_boxes.h): the processor's best within
+  // solver.simd and solver.avx512.
+  PathBoxKernel path_box_kernel_ = PathBoxKernel::kPortable;
   CollisionStats stats_;
   Vec3Array kinematic_reaction_;
 };

@@ -47,15 +47,6 @@ bool outsideBounds(const Vec3& x, double r, const Vec3& lo, const Vec3& hi) {
   return (x.array() + r < lo.array()).any() || (x.array() - r > hi.array()).any();
 }
 
-// The box of a particle's path over the substep, from `start` to x, grown by its radius r: what
-// the obstacles' cull tests, for one particle and for a block of them alike (the same arithmetic,
-// so a block's box holds each of its particles' boxes to the last bit).
-inline void pathBox(const Vec3& x, const Vec3& start, double r, Eigen::Array3d& lo,
-                    Eigen::Array3d& hi) {
-  lo = x.cwiseMin(start).array() - r;
-  hi = x.cwiseMax(start).array() + r;
-}
-
 // True when the boxes [a_lo, a_hi] and [b_lo, b_hi] share no point.
 bool boxesApart(const Eigen::Array3d& a_lo, const Eigen::Array3d& a_hi, const Vec3& b_lo,
                 const Vec3& b_hi) {
@@ -70,6 +61,7 @@ void Collisions::configure(const SceneConfig& scene) {
   thickness_ = scene.cloth.thickness;
   self_collision_ = scene.cloth.self_collision;
   gravity_ = scene.solver.gravity;
+  path_box_kernel_ = bestPathBoxKernel(scene.solver.simd, scene.solver.avx512);
   obstacles_.clear();
   obstacle_targets_.clear();
   shapes_.clear();
@@ -528,9 +520,10 @@ int Collisions::listNearObstacles(const Eigen::Array3d& lo, const Eigen::Array3d
   return near_count;
 }
 
-// The first pass over the free particles [begin, end): each one's path box (pathBox) once, for
-// three culls in turn, each exact, so that a particle that can touch nothing costs that box and
-// a few comparisons (a cloth falling or lying clear of most obstacles: most of its particles):
+// The first pass over the free particles [begin, end): each one's path box once (the block's in
+// one loop, computePathBoxes, in SIMD registers where the processor has them), for three culls
+// in turn, each exact, so that a particle that can touch nothing costs that box and a few
+// comparisons (a cloth falling or lying clear of most obstacles: most of its particles):
 //  - the block: an obstacle apart from the box holding all of the block's boxes is apart from
 //    each (its list `near`, in increasing order);
 //  - the particle: of those, the obstacles its own box reaches; none, and projectObstaclesOn
@@ -540,21 +533,9 @@ int Collisions::listNearObstacles(const Eigen::Array3d& lo, const Eigen::Array3d
 // A box that is not one (a coordinate not a number) lists every enabled obstacle and is never
 // inside the bounds, so that particle goes through every test as before.
 double Collisions::projectBlockFirstPass(Particles& p, int begin, int end, int* near) {
-  const double inf = std::numeric_limits<double>::infinity();
-  Eigen::Array3d box[kCullBlock][2];  // each particle's path box: lo, hi
-  Eigen::Array3d lo = Eigen::Array3d::Constant(inf), hi = Eigen::Array3d::Constant(-inf);
-  bool every = false;
-  for (int i = begin; i < end; ++i) {
-    if (p.inverse_mass[i] == 0.0) continue;
-    Eigen::Array3d& particle_lo = box[i - begin][0];
-    Eigen::Array3d& particle_hi = box[i - begin][1];
-    pathBox(p.position[i], p.substep_start[i], p.radius[i], particle_lo, particle_hi);
-    // (Bitwise, not short-circuit: no branch per particle.)
-    every |= !(particle_lo[0] <= particle_hi[0]) | !(particle_lo[1] <= particle_hi[1]) |
-             !(particle_lo[2] <= particle_hi[2]);
-    lo = lo.min(particle_lo);
-    hi = hi.max(particle_hi);
-  }
+  PathBox box[kCullBlock];  // each free particle's path box
+  Eigen::Array3d lo, hi;
+  const bool every = computePathBoxes(path_box_kernel_, p, begin, end, box, lo, hi);
   const int near_count = listNearObstacles(lo, hi, every, near);
   const bool bounds_apply = bounds_.enabled;
   const Eigen::Array3d bounds_min = bounds_.min.array(), bounds_max = bounds_.max.array();
@@ -567,8 +548,8 @@ double Collisions::projectBlockFirstPass(Particles& p, int begin, int end, int* 
   double max_change = 0.0;
   for (int i = begin; i < end; ++i) {
     if (p.inverse_mass[i] == 0.0) continue;  // kinematic: prescribed, left alone
-    const Eigen::Array3d& particle_lo = box[i - begin][0];
-    const Eigen::Array3d& particle_hi = box[i - begin][1];
+    const Eigen::Array3d particle_lo = box[i - begin].low();
+    const Eigen::Array3d particle_hi = box[i - begin].high();
     int first = 0;  // the first listed obstacle its box reaches
     while (first < near_count && boxesApart(particle_lo, particle_hi, obstacle_lo_[near[first]],
                                             obstacle_hi_[near[first]])) {
@@ -630,12 +611,18 @@ double Collisions::projectObstaclesOn(Particles& p, int i, bool first_pass, cons
     const Vec3 b = end.toLocal(x);        // where the particle is, relative to the shape now
     const Vec3 a = begin.toLocal(start);  // ... and where it was
     const bool mesh = shape.type == ShapeType::kMesh;
+    // |b - a| as Eigen's norm sums it, ((dx^2 + dy^2) + dz^2), but from the coordinates as they
+    // come: b and a are stored a coordinate at a time, and a 16-byte reload of them waits.
+    const double dx = b.x() - a.x(), dy = b.y() - a.y(), dz = b.z() - a.z();
+    const double path_length = std::sqrt((dx * dx + dy * dy) + dz * dz);
     if (mesh && !pushed) {
       // A mesh query costs a tree search; the last one bounds this one for free. The distance
       // is 1-Lipschitz, so d(b) >= d(b_last) - |b - b_last| (local frame): when even that
       // bound clears the segment, the test below would skip it too.
       const double lower = mesh_distance_[slot] - (b - mesh_point_[slot]).norm() - r;
-      if (lower >= (b - a).norm()) continue;
+      if (lower >= path_length) continue;
+    } else if (!pushed && surelyFartherThan(shape, b, r + path_length)) {
+      continue;  // the test below would skip it too, after a square root and a normal
     }
     Vec3 normal_b;
     int* hint = &mesh_hint_[slot];
@@ -646,7 +633,7 @@ double Collisions::projectObstaclesOn(Particles& p, int i, bool first_pass, cons
     }
     // The distance is 1-Lipschitz: a segment whose end is farther from the surface than its
     // length never touched the shape (unless it was pushed out earlier in this substep).
-    if (clearance >= (b - a).norm() && !pushed) continue;
+    if (clearance >= path_length && !pushed) continue;
     Vec3 normal_a;
     const double start_distance = signedDistance(shape, a, normal_a, hint);
     // The window's base is the particle's place on the shape when it began: carried by the

@@ -179,6 +179,40 @@ double signedDistance(const Shape& shape, const Vec3& x) {
   return signedDistance(shape, x, unused);
 }
 
+bool surelyFartherThan(const Shape& shape, const Vec3& x, double reach) {
+  // Rounding in signedDistance and the caller's subtraction is a few units in the last place of
+  // the lengths involved; 1e-9 of the squares is far more, and far less than any gap that matters.
+  constexpr double kMargin = 1.0 + 1e-9;
+  // A coordinate at a time: the caller has just stored x so, and a 16-byte load of it would wait.
+  const double x0 = x.x(), x1 = x.y(), x2 = x.z();
+  double far = reach + shape.padding;
+  double d2 = 0.0;
+  double squared = 0.0;
+  switch (shape.type) {
+    case ShapeType::kSphere:
+      far += shape.radius;
+      squared = x0 * x0 + x1 * x1 + x2 * x2;
+      break;
+    case ShapeType::kCapsule:
+      far += shape.radius;
+      d2 = x2 - std::clamp(x2, -shape.half_length, shape.half_length);
+      squared = x0 * x0 + x1 * x1 + d2 * d2;
+      break;
+    case ShapeType::kBox: {
+      const double q0 = std::max(std::abs(x0) - shape.half_extents.x(), 0.0);
+      const double q1 = std::max(std::abs(x1) - shape.half_extents.y(), 0.0);
+      const double q2 = std::max(std::abs(x2) - shape.half_extents.z(), 0.0);
+      squared = q0 * q0 + q1 * q1 + q2 * q2;
+      break;
+    }
+    case ShapeType::kPlane:
+    case ShapeType::kCylinder:
+    case ShapeType::kMesh:
+      return false;
+  }
+  return far > 0.0 && squared > kMargin * far * far;
+}
+
 bool sweepSphere(const Shape& shape, const Vec3& a, const Vec3& b, double r, double start_distance,
                  const Vec3& start_normal, double& t, Vec3& normal, int* hint) {
   const Vec3 direction = b - a;

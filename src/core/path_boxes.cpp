@@ -1,0 +1,140 @@
+#include "pbd_cloth/path_boxes.h"
+
+#include <limits>
+
+#if defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>
+#define PBD_CLOTH_HAVE_AVX2_PATH 1
+#endif
+
+namespace pbd_cloth {
+
+namespace {
+
+bool pathBoxesPortable(const Particles& p, int begin, int end, PathBox* box, Eigen::Array3d& lo,
+                       Eigen::Array3d& hi) {
+  const double inf = std::numeric_limits<double>::infinity();
+  lo = Eigen::Array3d::Constant(inf);
+  hi = Eigen::Array3d::Constant(-inf);
+  bool every = false;
+  for (int i = begin; i < end; ++i) {
+    if (p.inverse_mass[i] == 0.0) continue;
+    Eigen::Array3d particle_lo, particle_hi;
+    pathBox(p.position[i], p.substep_start[i], p.radius[i], particle_lo, particle_hi);
+    PathBox& b = box[i - begin];
+    for (int d = 0; d < 3; ++d) {
+      b.lo[d] = particle_lo[d];
+      b.hi[d] = particle_hi[d];
+    }
+    b.lo[3] = b.hi[3] = 0.0;
+    // (Bitwise, not short-circuit: no branch per particle.)
+    every |= !(particle_lo[0] <= particle_hi[0]) | !(particle_lo[1] <= particle_hi[1]) |
+             !(particle_lo[2] <= particle_hi[2]);
+    lo = lo.min(particle_lo);
+    hi = hi.max(particle_hi);
+  }
+  return every;
+}
+
+#ifdef PBD_CLOTH_HAVE_AVX2_PATH
+#define PBD_AVX2 __attribute__((target("avx2")))
+#define PBD_AVX512VL __attribute__((target("avx512f,avx512vl")))
+
+// How a register takes one particle's x y z (lane 3 zero); neither reads the double after z, so
+// the array's last particle is safe. AVX2: a 16-byte and an 8-byte load; AVX-512VL: one masked
+// load of three lanes.
+struct Avx2Xyz {
+  PBD_AVX2 static __m256d load(const double* p) {
+    return _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(p)), _mm_load_sd(p + 2), 1);
+  }
+};
+struct Avx512VlXyz {
+  PBD_AVX512VL static __m256d load(const double* p) { return _mm256_maskz_loadu_pd(0x7, p); }
+};
+
+// pathBoxesPortable's operations lane by lane. The operand order matches std::min and std::max
+// (and so Eigen's): vminpd(a, b) is a < b ? a : b, so min(x, start) = std::min(x, start) is
+// vminpd(start, x), and the union's std::min(lo, box) is vminpd(box, lo): the same choices,
+// NaN and signed zeros included, as the portable loop's.
+// (Compiled for AVX2, which both callers have, so that its intrinsics expand in it.)
+#pragma GCC push_options
+#pragma GCC target("avx2")
+template <class A>
+inline bool pathBoxesSimd(const Particles& p, int begin, int end, PathBox* box,
+                          Eigen::Array3d& lo_out, Eigen::Array3d& hi_out) {
+  const double* x = p.position.data()->data();
+  const double* start = p.substep_start.data()->data();
+  const double* inverse_mass = p.inverse_mass.data();
+  const double* radius = p.radius.data();
+  __m256d lo = _mm256_set1_pd(std::numeric_limits<double>::infinity());
+  __m256d hi = _mm256_set1_pd(-std::numeric_limits<double>::infinity());
+  __m256d not_box = _mm256_setzero_pd();
+  for (int i = begin; i < end; ++i) {
+    if (inverse_mass[i] == 0.0) continue;
+    const __m256d xi = A::load(x + 3 * static_cast<std::ptrdiff_t>(i));
+    const __m256d si = A::load(start + 3 * static_cast<std::ptrdiff_t>(i));
+    const __m256d r = _mm256_set1_pd(radius[i]);
+    const __m256d l = _mm256_sub_pd(_mm256_min_pd(si, xi), r);
+    const __m256d h = _mm256_add_pd(_mm256_max_pd(si, xi), r);
+    _mm256_store_pd(box[i - begin].lo, l);
+    _mm256_store_pd(box[i - begin].hi, h);
+    not_box = _mm256_or_pd(not_box, _mm256_cmp_pd(l, h, _CMP_NLE_UQ));  // !(lo <= hi)
+    lo = _mm256_min_pd(l, lo);
+    hi = _mm256_max_pd(h, hi);
+  }
+  alignas(32) double lo_lanes[4], hi_lanes[4];
+  _mm256_store_pd(lo_lanes, lo);
+  _mm256_store_pd(hi_lanes, hi);
+  lo_out = Eigen::Map<const Eigen::Array3d>(lo_lanes);
+  hi_out = Eigen::Map<const Eigen::Array3d>(hi_lanes);
+  return (_mm256_movemask_pd(not_box) & 0x7) != 0;
+}
+#pragma GCC pop_options
+
+__attribute__((flatten)) PBD_AVX2 bool pathBoxesAvx2(const Particles& p, int begin, int end,
+                                                     PathBox* box, Eigen::Array3d& lo,
+                                                     Eigen::Array3d& hi) {
+  return pathBoxesSimd<Avx2Xyz>(p, begin, end, box, lo, hi);
+}
+
+__attribute__((flatten)) PBD_AVX512VL bool pathBoxesAvx512Vl(const Particles& p, int begin, int end,
+                                                             PathBox* box, Eigen::Array3d& lo,
+                                                             Eigen::Array3d& hi) {
+  return pathBoxesSimd<Avx512VlXyz>(p, begin, end, box, lo, hi);
+}
+#endif
+
+}  // namespace
+
+PathBoxKernel bestPathBoxKernel(bool simd, bool avx512) {
+#ifdef PBD_CLOTH_HAVE_AVX2_PATH
+  static const bool has_avx2 = __builtin_cpu_supports("avx2");
+  static const bool has_avx512vl =
+      __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
+  if (simd && avx512 && has_avx512vl) return PathBoxKernel::kAvx512Vl;
+  if (simd && has_avx2) return PathBoxKernel::kAvx2;
+#else
+  (void)simd;
+  (void)avx512;
+#endif
+  return PathBoxKernel::kPortable;
+}
+
+bool computePathBoxes(PathBoxKernel kernel, const Particles& particles, int begin, int end,
+                      PathBox* box, Eigen::Array3d& lo, Eigen::Array3d& hi) {
+#ifdef PBD_CLOTH_HAVE_AVX2_PATH
+  switch (kernel) {
+    case PathBoxKernel::kAvx512Vl:
+      return pathBoxesAvx512Vl(particles, begin, end, box, lo, hi);
+    case PathBoxKernel::kAvx2:
+      return pathBoxesAvx2(particles, begin, end, box, lo, hi);
+    case PathBoxKernel::kPortable:
+      break;
+  }
+#else
+  (void)kernel;
+#endif
+  return pathBoxesPortable(particles, begin, end, box, lo, hi);
+}
+
+}  // namespace pbd_cloth
