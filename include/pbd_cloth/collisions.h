@@ -209,6 +209,14 @@ class Collisions {
   template <bool kFirstReaches>
   double projectObstaclesOn(Particles& particles, int i, bool first_pass, const int* near,
                             int near_count);
+  // True when free particle x (substep start `start`, radius r) surely stays clear of obstacle
+  // k, a shape that does not move in this substep, by its bounding ball: the exact test of
+  // projectObstaclesOn would skip it too.
+  bool clearOfStillShape(int k, const Vec3& x, const Vec3& start, double r) const;
+  // True when x lies farther than `reach` from obstacle k's bounding ball (boundingRadius about
+  // its frame at the substep's end), by a margin far above rounding: its distance to the
+  // shape is then larger than reach as computed.
+  bool outsideBoundingBall(const Vec3& x, double reach, int k) const;
   // The bounds' clamp of a free particle's position.
   double projectBoundsOn(Vec3& x) const;
   bool particleContactsActive(const Particles& particles) const;
@@ -232,6 +240,8 @@ class Collisions {
   long collider_changes_ = 0;   // enabled, disabled or state set: counted for sleeping
   std::vector<Frame> frame_begin_;
   std::vector<Frame> frame_end_;
+  std::vector<char> still_;  // frame_begin_ == frame_end_: the shape stays put this substep
+  std::vector<double> bound_radius_;  // boundingRadius of each shape
   Vec3Array obstacle_lo_;  // world bounds of each obstacle over the substep (begin and end poses)
   Vec3Array obstacle_hi_;
   // Each (particle, obstacle) pair's state, obstacle by obstacle: slot obstacle * particles +

@@ -73,6 +73,12 @@ double signedDistance(const Shape& shape, const Vec3& x);
 // within the margin: the caller then computes the distance.
 bool surelyFartherThan(const Shape& shape, const Vec3& x, double reach);
 
+// The radius of a ball about the shape's origin that holds the shape grown by its padding; +inf for
+// a plane. Since the distance to a set is at least the distance to a ball holding it, a point x
+// (local frame) has signedDistance(x) >= |x| - boundingRadius: a test without the local frame,
+// for a shape that does not move (Collisions::projectObstaclesOn).
+double boundingRadius(const Shape& shape);
+
 // Continuous collision: the first fraction t in [0, 1] at which a sphere of radius r moving along
 // the segment a -> b (local frame) touches the shape, i.e. signedDistance(a + t (b - a)) <= r.
 // Sphere tracing (Hart 1996): a step of (distance - r) never crosses the surface because the

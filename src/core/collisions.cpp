@@ -70,6 +70,8 @@ void Collisions::configure(const SceneConfig& scene) {
   teleport_.clear();
   frame_begin_.clear();
   frame_end_.clear();
+  still_.clear();
+  bound_radius_.clear();
   obstacle_lo_.clear();
   obstacle_hi_.clear();
   for (const auto& obstacle : scene.obstacles) addCollider(obstacle);
@@ -89,6 +91,8 @@ int Collisions::addCollider(const ObstacleConfig& collider) {
   teleport_.push_back(0);
   frame_begin_.push_back(frameFromPose(collider.pose));
   frame_end_.push_back(frame_begin_.back());
+  still_.push_back(1);
+  bound_radius_.push_back(boundingRadius(shapes_.back()));
   obstacle_lo_.push_back(Vec3::Zero());
   obstacle_hi_.push_back(Vec3::Zero());
   return static_cast<int>(obstacles_.size()) - 1;
@@ -295,6 +299,7 @@ void Collisions::beginStep(Particles& particles, const ClothTopology& topology, 
   std::fill(kinematic_reaction_.begin(), kinematic_reaction_.end(), Vec3::Zero());
   for (std::size_t k = 0; k < obstacles_.size(); ++k) {
     frame_begin_[k] = frame_end_[k] = frameFromPose(obstacles_[k].pose);
+    still_[k] = 1;
   }
   const bool particle_contacts = particleContactsActive(particles);
   const bool self_collision = selfCollisionActive(topology);
@@ -340,6 +345,8 @@ void Collisions::setSubstepFraction(double s_begin, double s_end) {
   for (std::size_t k = 0; k < obstacles_.size(); ++k) {
     frame_begin_[k] = interpolateFrame(obstacles_[k].pose, obstacle_targets_[k], s_begin);
     frame_end_[k] = interpolateFrame(obstacles_[k].pose, obstacle_targets_[k], s_end);
+    still_[k] = frame_begin_[k].rotation == frame_end_[k].rotation &&
+                frame_begin_[k].translation == frame_end_[k].translation;
     Vec3 lo, hi;
     worldBounds(shapes_[k], frame_begin_[k], obstacle_lo_[k], obstacle_hi_[k]);
     worldBounds(shapes_[k], frame_end_[k], lo, hi);
@@ -448,6 +455,9 @@ void Collisions::preStabilizeObstacles(Particles& p, double max_shift) {
         // Outside the shape's bounds grown by the radius: no overlap to separate (and no query,
         // which for a mesh is a tree search); its allowance stays zero.
         if (outsideBounds(p.position[i], p.radius[i], obstacle_lo_[k], obstacle_hi_[k])) continue;
+        // Nor outside its bounding ball grown by the radius, with a margin far above rounding:
+        // the clearance below would be positive (the slot's allowance is already zero).
+        if (outsideBoundingBall(p.position[i], p.radius[i], static_cast<int>(k))) continue;
         Vec3 normal;
         const double clearance =
             signedDistance(shapes_[k], frame_end_[k].toLocal(p.position[i]), normal) - p.radius[i];
@@ -550,9 +560,11 @@ double Collisions::projectBlockFirstPass(Particles& p, int begin, int end, int* 
     if (p.inverse_mass[i] == 0.0) continue;  // kinematic: prescribed, left alone
     const Eigen::Array3d particle_lo = box[i - begin].low();
     const Eigen::Array3d particle_hi = box[i - begin].high();
-    int first = 0;  // the first listed obstacle its box reaches
-    while (first < near_count && boxesApart(particle_lo, particle_hi, obstacle_lo_[near[first]],
-                                            obstacle_hi_[near[first]])) {
+    int first = 0;  // the first listed obstacle its box reaches, of those it may touch
+    while (first < near_count &&
+           (boxesApart(particle_lo, particle_hi, obstacle_lo_[near[first]],
+                       obstacle_hi_[near[first]]) ||
+            clearOfStillShape(near[first], p.position[i], p.substep_start[i], p.radius[i]))) {
       ++first;
     }
     if (first < near_count) {
@@ -564,6 +576,27 @@ double Collisions::projectBlockFirstPass(Particles& p, int begin, int end, int* 
     if (bounds_apply) max_change = std::max(max_change, projectBoundsOn(p.position[i]));
   }
   return max_change;
+}
+
+// A shape that stays put over the substep: in its frame the path is as long as in the world's,
+// and the distance is at least |x - centre| less the bounding radius (boundingRadius). A
+// particle clear of that ball by more than its path, with a margin far above rounding, is one
+// projectObstaclesOn's exact test (distance - r >= path length) skips too: found with neither
+// frame's product, a square root of theirs or a normal.
+bool Collisions::clearOfStillShape(int k, const Vec3& x, const Vec3& start, double r) const {
+  if (!still_[k]) return false;
+  const double px = x.x() - start.x(), py = x.y() - start.y(), pz = x.z() - start.z();
+  return outsideBoundingBall(x, r + std::sqrt(px * px + py * py + pz * pz), k);
+}
+
+// True when x lies farther than reach from obstacle k's bounding ball at the substep's end, by a
+// relative 1e-9 of the squares (rounding in the distance and in the frame's product is a few
+// units in the last place). A coordinate at a time: x has often just been stored so.
+bool Collisions::outsideBoundingBall(const Vec3& x, double reach, int k) const {
+  const Vec3& centre = frame_end_[k].translation;
+  const double cx = x.x() - centre.x(), cy = x.y() - centre.y(), cz = x.z() - centre.z();
+  const double far = bound_radius_[k] + reach;
+  return cx * cx + cy * cy + cz * cz > (1.0 + 1e-9) * far * far;
 }
 
 // Particle-environment contact (seed eq. plane_constraint, extended to any shape through its
@@ -608,6 +641,7 @@ double Collisions::projectObstaclesOn(Particles& p, int i, bool first_pass, cons
     const Shape& shape = shapes_[k];
     const Frame& begin = frame_begin_[k];
     const Frame& end = frame_end_[k];
+    if (!pushed && clearOfStillShape(static_cast<int>(k), x, start, r)) continue;
     const Vec3 b = end.toLocal(x);        // where the particle is, relative to the shape now
     const Vec3 a = begin.toLocal(start);  // ... and where it was
     const bool mesh = shape.type == ShapeType::kMesh;

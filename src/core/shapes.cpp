@@ -213,6 +213,31 @@ bool surelyFartherThan(const Shape& shape, const Vec3& x, double reach) {
   return far > 0.0 && squared > kMargin * far * far;
 }
 
+double boundingRadius(const Shape& shape) {
+  double radius = std::numeric_limits<double>::infinity();
+  switch (shape.type) {
+    case ShapeType::kSphere:
+      radius = shape.radius;
+      break;
+    case ShapeType::kCapsule:
+      radius = shape.radius + shape.half_length;
+      break;
+    case ShapeType::kBox:
+      radius = shape.half_extents.norm();
+      break;
+    case ShapeType::kCylinder:
+      radius = std::hypot(shape.radius, shape.half_length);
+      break;
+    case ShapeType::kMesh:
+      radius =
+          shape.mesh->boundsMin().cwiseAbs().cwiseMax(shape.mesh->boundsMax().cwiseAbs()).norm();
+      break;
+    case ShapeType::kPlane:
+      return radius;
+  }
+  return radius + std::max(shape.padding, 0.0);
+}
+
 bool sweepSphere(const Shape& shape, const Vec3& a, const Vec3& b, double r, double start_distance,
                  const Vec3& start_normal, double& t, Vec3& normal, int* hint) {
   const Vec3 direction = b - a;

@@ -1,7 +1,8 @@
-// The obstacles' first-pass culls (path_boxes.h, shapes.h surelyFartherThan): the path boxes'
-// AVX-512VL, AVX2 and portable kernels agree to the bit, NaN and kinematic particles included,
-// and give the boxes their definition says; the distance pre-test never answers "farther" where
-// the contact pass's own test would not skip, and does answer it away from the shapes.
+// The obstacle contact pass's culls (path_boxes.h; shapes.h surelyFartherThan, boundingRadius):
+// the path boxes' AVX-512VL, AVX2 and portable kernels agree to the bit, NaN and kinematic
+// particles included, and give the boxes their definition says; the distance pre-test never
+// answers "farther" where the contact pass's own test would not skip, and does answer it away
+// from the shapes; every shape lies within its bounding ball.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -10,6 +11,7 @@
 #include <random>
 #include <vector>
 
+#include "mesh_builders.h"
 #include "pbd_cloth/path_boxes.h"
 #include "pbd_cloth/shapes.h"
 
@@ -112,6 +114,12 @@ TEST(PathBoxes, BoxesHoldThePathsAndTheUnionTheBoxes) {
 Shape testShape(ShapeType type) {
   Shape shape;
   shape.type = type;
+  if (type == ShapeType::kMesh) {
+    test::MeshGeometry torus = test::torusMesh(0.3, 0.1, 24, 12);
+    for (Vec3& v : torus.vertices) v += Vec3(0.05, -0.02, 0.1);  // off its origin
+    torus.orientOutward();
+    shape.mesh = torus.build();
+  }
   shape.radius = 0.2;
   shape.half_length = 0.3;
   shape.half_extents = Vec3(0.5, 0.4, 0.025);
@@ -158,6 +166,45 @@ TEST(SurelyFartherThan, NeverSaysFartherWhereTheDistanceDoesNot) {
   // No cheap test for the others: the caller computes their distance.
   EXPECT_FALSE(surelyFartherThan(testShape(ShapeType::kPlane), Vec3(0.0, 0.0, 5.0), 0.01));
   EXPECT_FALSE(surelyFartherThan(testShape(ShapeType::kCylinder), Vec3(5.0, 0.0, 0.0), 0.01));
+}
+
+// The distance to a shape is at least the distance to a ball holding it: for random points
+// around each shape (the mesh a torus off its origin), signedDistance(x) >= |x| - boundingRadius,
+// and points inside the shape lie in the ball; for the sphere, the capsule and the box the
+// padded surface reaches the ball (the bound is tight). A plane has none.
+TEST(BoundingRadius, HoldsEveryShapeAndBoundsItsDistance) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> unit(-0.8, 0.8);
+  for (ShapeType type : {ShapeType::kSphere, ShapeType::kCapsule, ShapeType::kBox,
+                         ShapeType::kCylinder, ShapeType::kMesh}) {
+    const Shape shape = testShape(type);
+    const double bound = boundingRadius(shape);
+    ASSERT_TRUE(std::isfinite(bound)) << toString(type);
+    int inside = 0;
+    double farthest_inside = 0.0;
+    for (int trial = 0; trial < 20000; ++trial) {
+      const Vec3 x(unit(rng), unit(rng), unit(rng));
+      const double d = signedDistance(shape, x);
+      EXPECT_GE(d, x.norm() - bound - 1e-12) << toString(type) << " trial " << trial;
+      if (d <= 0.0) {
+        ++inside;
+        farthest_inside = std::max(farthest_inside, x.norm());
+        EXPECT_LE(x.norm(), bound) << toString(type);
+      }
+    }
+    EXPECT_GT(inside, 50) << toString(type);
+    if (type == ShapeType::kSphere || type == ShapeType::kCapsule || type == ShapeType::kBox) {
+      // Points along the farthest direction, on the surface: the bound is reached.
+      Vec3 far_point = type == ShapeType::kSphere    ? Vec3(0.2, 0.0, 0.0)
+                       : type == ShapeType::kCapsule ? Vec3(0.0, 0.0, 0.5)
+                                                     : Vec3(shape.half_extents);
+      EXPECT_NEAR(far_point.norm() + shape.padding, bound, 1e-12) << toString(type);
+      // ... and the padded surface reaches it there.
+      EXPECT_NEAR(signedDistance(shape, far_point.normalized() * bound), 0.0, 1e-12)
+          << toString(type);
+    }
+  }
+  EXPECT_TRUE(std::isinf(boundingRadius(testShape(ShapeType::kPlane))));
 }
 
 }  // namespace
