@@ -240,7 +240,10 @@ class Collisions {
   long collider_changes_ = 0;   // enabled, disabled or state set: counted for sleeping
   std::vector<Frame> frame_begin_;
   std::vector<Frame> frame_end_;
-  std::vector<char> still_;  // frame_begin_ == frame_end_: the shape stays put this substep
+  // The shape stays put this substep (frame_begin_ == frame_end_) and takes the bounding-ball
+  // cull (ball_cull_: not a box or a plane): clearOfStillShape applies.
+  std::vector<char> still_;
+  std::vector<char> ball_cull_;
   std::vector<double> bound_radius_;  // boundingRadius of each shape
   Vec3Array obstacle_lo_;  // world bounds of each obstacle over the substep (begin and end poses)
   Vec3Array obstacle_hi_;
@@ -300,6 +303,7 @@ class Collisions {
   double thread_max_change_[kMaxThreads] = {};
   // projectBlockFirstPass's lists, one of obstacles_.size() entries for each thread.
   std::vector<int> near_obstacles_;
+  std::vector<PathBox> near_boxes_;  // their bounds, the same slots (reachedObstacles)
   // The loop that computes a block's path boxes (path_boxes.h): the processor's best within
   // solver.simd and solver.avx512.
   PathBoxKernel path_box_kernel_ = PathBoxKernel::kPortable;

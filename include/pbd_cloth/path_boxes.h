@@ -12,6 +12,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cstdint>
 
 #include "pbd_cloth/particles.h"
 
@@ -51,5 +52,23 @@ PathBoxKernel bestPathBoxKernel(bool simd, bool avx512);
 // whose minimum and maximum drop a NaN, then does not hold it. Allocates nothing.
 bool computePathBoxes(PathBoxKernel kernel, const Particles& particles, int begin, int end,
                       PathBox* box, Eigen::Array3d& lo, Eigen::Array3d& hi);
+
+// A world box [lo, hi] in PathBox's lanes, lane 3 from -inf to +inf so that it neither keeps a
+// particle's box out nor leaves one outside (an obstacle's bounds, the scene's bounds).
+PathBox boxOfBounds(const Vec3& lo, const Vec3& hi);
+
+// The most obstacles reachedObstacles tests (a bit each).
+constexpr int kMostReachTests = 64;
+
+// For each free particle of [begin, end), from the boxes computePathBoxes wrote with the same
+// kernel: bit q of reach[i - begin] set when its box reaches obstacle[q] (q < min(count,
+// kMostReachTests); the boxes share a point, as !boxesApart), and inside[i - begin] = 1 when its
+// box lies inside `bounds` (lo >= bounds.lo and hi <= bounds.hi), else 0. Comparisons with a NaN
+// are false, as in the scalar tests (boxesApart): a NaN coordinate keeps no obstacle out, and
+// a box with one is inside nothing.
+// Kinematic particles' slots are left as they were. Allocates nothing.
+void reachedObstacles(PathBoxKernel kernel, const Particles& particles, int begin, int end,
+                      const PathBox* box, const PathBox* obstacle, int count, const PathBox& bounds,
+                      std::uint64_t* reach, unsigned char* inside);
 
 }  // namespace pbd_cloth

@@ -70,11 +70,15 @@ class Solver {
   // The free particles' update (of the substep ending), prediction (of the substep to s_end), or
   // both in one pass; kinematic particles take their prescribed motion.
   void advance(double h, double s_end, bool update, bool predict, Particles& p);
+  // first_pass: the substep's first, whose multipliers start at zero; last_pass: its last by the
+  // count (solver.iterations), after which only the kinematic reactions read multipliers.
   double projectPass(double h, Particles& p, const ClothTopology& topology, Collisions& collisions,
-                     bool first_pass);
+                     bool first_pass, bool last_pass);
   double projectStretch(double h, Particles& p, const ClothTopology& topology, bool first_pass);
-  double projectBend(double h, Particles& p, const ClothTopology& topology, bool first_pass);
-  double projectFlatBend(Particles& p, const ClothTopology& topology, bool first_pass);
+  double projectBend(double h, Particles& p, const ClothTopology& topology, bool first_pass,
+                     bool last_pass);
+  double projectFlatBend(Particles& p, const ClothTopology& topology, bool first_pass,
+                         bool last_pass);
   bool flatBend(const ClothTopology& topology) const;
   void prepareBendStep(const Particles& p, const ClothTopology& topology, double h);
   double projectTethers(Particles& p, const ClothTopology& topology);

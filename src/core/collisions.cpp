@@ -71,6 +71,7 @@ void Collisions::configure(const SceneConfig& scene) {
   frame_begin_.clear();
   frame_end_.clear();
   still_.clear();
+  ball_cull_.clear();
   bound_radius_.clear();
   obstacle_lo_.clear();
   obstacle_hi_.clear();
@@ -91,7 +92,11 @@ int Collisions::addCollider(const ObstacleConfig& collider) {
   teleport_.push_back(0);
   frame_begin_.push_back(frameFromPose(collider.pose));
   frame_end_.push_back(frame_begin_.back());
-  still_.push_back(1);
+  // A box's or a plane's bounds already hold it as closely as a ball would (an upright box's
+  // are the box): no ball cull for them, which would only add its cost to every contact.
+  const ShapeType type = shapes_.back().type;
+  ball_cull_.push_back(type != ShapeType::kBox && type != ShapeType::kPlane);
+  still_.push_back(ball_cull_.back());
   bound_radius_.push_back(boundingRadius(shapes_.back()));
   obstacle_lo_.push_back(Vec3::Zero());
   obstacle_hi_.push_back(Vec3::Zero());
@@ -156,6 +161,7 @@ void Collisions::prepare(const Particles& particles, const ClothTopology& topolo
   mesh_distance_.assign(obstacle_contacts_.size(), -std::numeric_limits<double>::infinity());
   mesh_point_.assign(obstacle_contacts_.size(), Vec3::Zero());
   near_obstacles_.assign(static_cast<std::size_t>(kMaxThreads) * obstacles_.size(), 0);
+  near_boxes_.assign(near_obstacles_.size(), PathBox());
   box_lo_.assign(n, Vec3::Zero());
   box_hi_.assign(n, Vec3::Zero());
   kinematic_reaction_.assign(n, Vec3::Zero());
@@ -299,7 +305,7 @@ void Collisions::beginStep(Particles& particles, const ClothTopology& topology, 
   std::fill(kinematic_reaction_.begin(), kinematic_reaction_.end(), Vec3::Zero());
   for (std::size_t k = 0; k < obstacles_.size(); ++k) {
     frame_begin_[k] = frame_end_[k] = frameFromPose(obstacles_[k].pose);
-    still_[k] = 1;
+    still_[k] = ball_cull_[k];
   }
   const bool particle_contacts = particleContactsActive(particles);
   const bool self_collision = selfCollisionActive(topology);
@@ -345,7 +351,7 @@ void Collisions::setSubstepFraction(double s_begin, double s_end) {
   for (std::size_t k = 0; k < obstacles_.size(); ++k) {
     frame_begin_[k] = interpolateFrame(obstacles_[k].pose, obstacle_targets_[k], s_begin);
     frame_end_[k] = interpolateFrame(obstacles_[k].pose, obstacle_targets_[k], s_end);
-    still_[k] = frame_begin_[k].rotation == frame_end_[k].rotation &&
+    still_[k] = ball_cull_[k] && frame_begin_[k].rotation == frame_end_[k].rotation &&
                 frame_begin_[k].translation == frame_end_[k].translation;
     Vec3 lo, hi;
     worldBounds(shapes_[k], frame_begin_[k], obstacle_lo_[k], obstacle_hi_[k]);
@@ -457,7 +463,9 @@ void Collisions::preStabilizeObstacles(Particles& p, double max_shift) {
         if (outsideBounds(p.position[i], p.radius[i], obstacle_lo_[k], obstacle_hi_[k])) continue;
         // Nor outside its bounding ball grown by the radius, with a margin far above rounding:
         // the clearance below would be positive (the slot's allowance is already zero).
-        if (outsideBoundingBall(p.position[i], p.radius[i], static_cast<int>(k))) continue;
+        if (ball_cull_[k] && outsideBoundingBall(p.position[i], p.radius[i], static_cast<int>(k))) {
+          continue;
+        }
         Vec3 normal;
         const double clearance =
             signedDistance(shapes_[k], frame_end_[k].toLocal(p.position[i]), normal) - p.radius[i];
@@ -548,29 +556,48 @@ double Collisions::projectBlockFirstPass(Particles& p, int begin, int end, int* 
   const bool every = computePathBoxes(path_box_kernel_, p, begin, end, box, lo, hi);
   const int near_count = listNearObstacles(lo, hi, every, near);
   const bool bounds_apply = bounds_.enabled;
-  const Eigen::Array3d bounds_min = bounds_.min.array(), bounds_max = bounds_.max.array();
-  auto insideBounds = [&](const Eigen::Array3d& a, const Eigen::Array3d& b) {
-    return (a >= bounds_min).all() && (b <= bounds_max).all();
-  };
   // The whole block clear of every obstacle and inside the bounds: nothing to do. (Not with a
   // box that is not one: the union's min and max may have dropped its NaN.)
-  if (near_count == 0 && !every && (!bounds_apply || insideBounds(lo, hi))) return 0.0;
+  if (near_count == 0 && !every &&
+      (!bounds_apply || ((lo >= bounds_.min.array()).all() && (hi <= bounds_.max.array()).all()))) {
+    return 0.0;
+  }
+  // Each particle's box against the listed obstacles' bounds and the scene's, in one loop over
+  // the block (reachedObstacles): a bit for each listed obstacle it reaches, and whether it lies
+  // inside the bounds.
+  PathBox* near_box = near_boxes_.data() + (near - near_obstacles_.data());
+  for (int q = 0; q < near_count; ++q) {
+    near_box[q] = boxOfBounds(obstacle_lo_[near[q]], obstacle_hi_[near[q]]);
+  }
+  const PathBox bounds = boxOfBounds(bounds_.min, bounds_.max);
+  std::uint64_t reach[kCullBlock];
+  unsigned char inside[kCullBlock];
+  reachedObstacles(path_box_kernel_, p, begin, end, box, near_box, near_count, bounds, reach,
+                   inside);
   double max_change = 0.0;
   for (int i = begin; i < end; ++i) {
     if (p.inverse_mass[i] == 0.0) continue;  // kinematic: prescribed, left alone
-    const Eigen::Array3d particle_lo = box[i - begin].low();
-    const Eigen::Array3d particle_hi = box[i - begin].high();
-    int first = 0;  // the first listed obstacle its box reaches, of those it may touch
-    while (first < near_count &&
-           (boxesApart(particle_lo, particle_hi, obstacle_lo_[near[first]],
-                       obstacle_hi_[near[first]]) ||
-            clearOfStillShape(near[first], p.position[i], p.substep_start[i], p.radius[i]))) {
-      ++first;
+    // The first listed obstacle its box reaches, of those it may touch (the bits in increasing
+    // order; past the bits' reach, box by box).
+    int first = near_count;
+    for (std::uint64_t bits = reach[i - begin]; bits != 0; bits &= bits - 1) {
+      const int q = __builtin_ctzll(bits);
+      if (!clearOfStillShape(near[q], p.position[i], p.substep_start[i], p.radius[i])) {
+        first = q;
+        break;
+      }
+    }
+    for (int q = kMostReachTests; first == near_count && q < near_count; ++q) {
+      if (!boxesApart(box[i - begin].low(), box[i - begin].high(), obstacle_lo_[near[q]],
+                      obstacle_hi_[near[q]]) &&
+          !clearOfStillShape(near[q], p.position[i], p.substep_start[i], p.radius[i])) {
+        first = q;
+      }
     }
     if (first < near_count) {
       max_change = std::max(max_change,
                             projectObstaclesOn<true>(p, i, true, near + first, near_count - first));
-    } else if (bounds_apply && insideBounds(particle_lo, particle_hi)) {
+    } else if (bounds_apply && inside[i - begin]) {
       continue;
     }
     if (bounds_apply) max_change = std::max(max_change, projectBoundsOn(p.position[i]));
@@ -641,7 +668,11 @@ double Collisions::projectObstaclesOn(Particles& p, int i, bool first_pass, cons
     const Shape& shape = shapes_[k];
     const Frame& begin = frame_begin_[k];
     const Frame& end = frame_end_[k];
-    if (!pushed && clearOfStillShape(static_cast<int>(k), x, start, r)) continue;
+    // (The caller of a kFirstReaches pass has tested the first obstacle so already.)
+    if (!pushed && !(kFirstReaches && k == first) &&
+        clearOfStillShape(static_cast<int>(k), x, start, r)) {
+      continue;
+    }
     const Vec3 b = end.toLocal(x);        // where the particle is, relative to the shape now
     const Vec3 a = begin.toLocal(start);  // ... and where it was
     const bool mesh = shape.type == ShapeType::kMesh;

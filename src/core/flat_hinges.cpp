@@ -16,13 +16,14 @@ namespace {
 
 // Coordinate by coordinate, in the operation order of the AVX2 lanes below:
 // dlambda = (g_1 (x_1 - x_0) + g_2 (x_2 - x_0)) + g_3 (x_3 - x_0) - decay lambda.
-double projectPortable(const FlatHinge* hinge, int count, bool lambda_from_zero, bool track_change,
-                       double* x, double* lambda) {
+double projectPortable(const FlatHinge* hinge, int count, bool lambda_from_zero,
+                       bool keep_multipliers, bool track_change, double* x, double* lambda) {
   double largest_sq = 0.0;
   for (int c = 0; c < count; ++c) {
     const FlatHinge& h = hinge[c];
+    const bool keep = keep_multipliers || h.reaction;
     if (h.largest_move == 0.0) {
-      if (lambda_from_zero) lambda[3 * c] = lambda[3 * c + 1] = lambda[3 * c + 2] = 0.0;
+      if (lambda_from_zero && keep) lambda[3 * c] = lambda[3 * c + 1] = lambda[3 * c + 2] = 0.0;
       continue;
     }
     double* corner[4] = {x + 3 * h.index[0], x + 3 * h.index[1], x + 3 * h.index[2],
@@ -34,10 +35,10 @@ double projectPortable(const FlatHinge* hinge, int count, bool lambda_from_zero,
                          h.gain[2] * (corner[3][d] - x0);
       if (lambda_from_zero) {
         dlambda[d] = sum;
-        lambda[3 * c + d] = sum;
+        if (keep) lambda[3 * c + d] = sum;
       } else {
         dlambda[d] = sum - h.decay * lambda[3 * c + d];
-        lambda[3 * c + d] += dlambda[d];
+        if (keep) lambda[3 * c + d] += dlambda[d];
       }
       for (int v = 0; v < 4; ++v) corner[v][d] += h.move[v] * dlambda[d];
     }
@@ -98,17 +99,19 @@ struct Avx512VlXyz {
 // projectPortable's arithmetic with a hinge's three coordinates in the lanes of one register, in
 // the same operations and order (GCC's vector operators, compiled to the caller's instruction
 // set: no contraction into fused multiply-adds, so the same roundings and the same bits).
-template <class A>
-inline double projectHinges(const FlatHinge* hinge, int count, bool lambda_from_zero,
-                            bool track_change, double* x, double* lambda) {
+// kKeepAll: every hinge writes its multipliers (a later pass reads them), with no test a hinge.
+template <class A, bool kKeepAll>
+inline double sweepHinges(const FlatHinge* hinge, int count, bool lambda_from_zero,
+                          bool track_change, double* x, double* lambda) {
   double largest_sq = 0.0;
   __m256d zero, gain[3], decay, move[4];
   A::broadcast(0.0, zero);
   for (int c = 0; c < count; ++c) {
     const FlatHinge& h = hinge[c];
     double* hinge_lambda = lambda + 3 * c;
+    const bool keep = kKeepAll || h.reaction;
     if (h.largest_move == 0.0) {
-      if (lambda_from_zero) A::storeLambda(hinge_lambda, zero);
+      if (lambda_from_zero && keep) A::storeLambda(hinge_lambda, zero);
       continue;
     }
     double* corner[4] = {x + 3 * h.index[0], x + 3 * h.index[1], x + 3 * h.index[2],
@@ -124,13 +127,13 @@ inline double projectHinges(const FlatHinge* hinge, int count, bool lambda_from_
     const __m256d sum = (gain[0] * (x1 - x0) + gain[1] * (x2 - x0)) + gain[2] * (x3 - x0);
     __m256d dlambda = sum;
     if (lambda_from_zero) {
-      A::storeLambda(hinge_lambda, sum);
+      if (keep) A::storeLambda(hinge_lambda, sum);
     } else {
       __m256d old_lambda;
       A::loadLambda(hinge_lambda, old_lambda);
       A::broadcast(h.decay, decay);
       dlambda = sum - decay * old_lambda;
-      A::storeLambda(hinge_lambda, old_lambda + dlambda);
+      if (keep) A::storeLambda(hinge_lambda, old_lambda + dlambda);
     }
     A::store(corner[0], x0 + move[0] * dlambda);
     A::store(corner[1], x1 + move[1] * dlambda);
@@ -143,17 +146,28 @@ inline double projectHinges(const FlatHinge* hinge, int count, bool lambda_from_
   return largest_sq;
 }
 
+template <class A>
+inline double projectHinges(const FlatHinge* hinge, int count, bool lambda_from_zero,
+                            bool keep_multipliers, bool track_change, double* x, double* lambda) {
+  return keep_multipliers
+             ? sweepHinges<A, true>(hinge, count, lambda_from_zero, track_change, x, lambda)
+             : sweepHinges<A, false>(hinge, count, lambda_from_zero, track_change, x, lambda);
+}
+
 __attribute__((flatten)) PBD_AVX2 double projectAvx2(const FlatHinge* hinge, int count,
-                                                     bool lambda_from_zero, bool track_change,
-                                                     double* x, double* lambda) {
-  return projectHinges<Avx2Xyz>(hinge, count, lambda_from_zero, track_change, x, lambda);
+                                                     bool lambda_from_zero, bool keep_multipliers,
+                                                     bool track_change, double* x, double* lambda) {
+  return projectHinges<Avx2Xyz>(hinge, count, lambda_from_zero, keep_multipliers, track_change, x,
+                                lambda);
 }
 
 __attribute__((flatten)) PBD_AVX512VL double projectAvx512Vl(const FlatHinge* hinge, int count,
                                                              bool lambda_from_zero,
+                                                             bool keep_multipliers,
                                                              bool track_change, double* x,
                                                              double* lambda) {
-  return projectHinges<Avx512VlXyz>(hinge, count, lambda_from_zero, track_change, x, lambda);
+  return projectHinges<Avx512VlXyz>(hinge, count, lambda_from_zero, keep_multipliers, track_change,
+                                    x, lambda);
 }
 #endif
 
@@ -172,6 +186,10 @@ FlatHinge makeFlatHinge(const BendConstraint& con, const double* inverse_mass, d
                         double k, double min_weight) {
   FlatHinge hinge;
   double w = 0.0, largest = 0.0;
+  int kinematic = 0;
+  for (int v = 0; v < 4; ++v) kinematic += inverse_mass[con.index[v]] == 0.0;
+  // (Solver::startReactions lists the same hinges: kinematic_bend_.)
+  const bool reaction = kinematic > 0 && kinematic < 4;
   for (int v = 0; v < 4; ++v) {
     const double wv = inverse_mass[con.index[v]];
     w += wv * con.weight[v] * con.weight[v];
@@ -180,7 +198,12 @@ FlatHinge makeFlatHinge(const BendConstraint& con, const double* inverse_mass, d
     largest = std::max(largest, std::abs(hinge.move[v]));
   }
   w *= con.scale * con.scale;
-  if (w < min_weight) return FlatHinge();  // no free corner: skipped (largest_move 0)
+  if (w < min_weight) {  // no free corner: skipped (largest_move 0)
+    FlatHinge skipped;
+    skipped.reaction = reaction;
+    return skipped;
+  }
+  hinge.reaction = reaction;
   const double inverse_denominator = 1.0 / (w + alpha);
   for (int v = 0; v < 3; ++v)
     hinge.gain[v] = -k * con.scale * con.weight[v + 1] * inverse_denominator;
@@ -190,20 +213,25 @@ FlatHinge makeFlatHinge(const BendConstraint& con, const double* inverse_mass, d
 }
 
 double projectFlatHinges(const FlatHinge* hinge, int count, bool lambda_from_zero,
-                         bool track_change, bool simd, bool avx512, double* x, double* lambda) {
+                         bool keep_multipliers, bool track_change, bool simd, bool avx512,
+                         double* x, double* lambda) {
   double largest_sq = 0.0;
 #ifdef PBD_CLOTH_HAVE_AVX2_PATH
   if (simd && avx512 && flatHingesUseAvx512Vl()) {
-    largest_sq = projectAvx512Vl(hinge, count, lambda_from_zero, track_change, x, lambda);
+    largest_sq =
+        projectAvx512Vl(hinge, count, lambda_from_zero, keep_multipliers, track_change, x, lambda);
   } else if (simd && stretchLinksUseAvx2()) {
-    largest_sq = projectAvx2(hinge, count, lambda_from_zero, track_change, x, lambda);
+    largest_sq =
+        projectAvx2(hinge, count, lambda_from_zero, keep_multipliers, track_change, x, lambda);
   } else {
-    largest_sq = projectPortable(hinge, count, lambda_from_zero, track_change, x, lambda);
+    largest_sq =
+        projectPortable(hinge, count, lambda_from_zero, keep_multipliers, track_change, x, lambda);
   }
 #else
   (void)simd;
   (void)avx512;
-  largest_sq = projectPortable(hinge, count, lambda_from_zero, track_change, x, lambda);
+  largest_sq =
+      projectPortable(hinge, count, lambda_from_zero, keep_multipliers, track_change, x, lambda);
 #endif
   return std::sqrt(largest_sq);
 }

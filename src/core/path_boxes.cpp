@@ -1,5 +1,6 @@
 #include "pbd_cloth/path_boxes.h"
 
+#include <algorithm>
 #include <limits>
 
 #if defined(__x86_64__) && defined(__GNUC__)
@@ -34,6 +35,27 @@ bool pathBoxesPortable(const Particles& p, int begin, int end, PathBox* box, Eig
     hi = hi.max(particle_hi);
   }
   return every;
+}
+
+void reachedPortable(const Particles& p, int begin, int end, const PathBox* box,
+                     const PathBox* obstacle, int count, const PathBox& bounds,
+                     std::uint64_t* reach, unsigned char* inside) {
+  for (int i = begin; i < end; ++i) {
+    if (p.inverse_mass[i] == 0.0) continue;
+    const double* l = box[i - begin].lo;
+    const double* h = box[i - begin].hi;
+    std::uint64_t bits = 0;
+    for (int q = 0; q < count; ++q) {
+      const double* olo = obstacle[q].lo;
+      const double* ohi = obstacle[q].hi;
+      const bool apart = (h[0] < olo[0]) | (h[1] < olo[1]) | (h[2] < olo[2]) | (l[0] > ohi[0]) |
+                         (l[1] > ohi[1]) | (l[2] > ohi[2]);
+      bits |= static_cast<std::uint64_t>(!apart) << q;
+    }
+    reach[i - begin] = bits;
+    inside[i - begin] = (l[0] >= bounds.lo[0]) & (l[1] >= bounds.lo[1]) & (l[2] >= bounds.lo[2]) &
+                        (h[0] <= bounds.hi[0]) & (h[1] <= bounds.hi[1]) & (h[2] <= bounds.hi[2]);
+  }
 }
 
 #ifdef PBD_CLOTH_HAVE_AVX2_PATH
@@ -91,6 +113,30 @@ inline bool pathBoxesSimd(const Particles& p, int begin, int end, PathBox* box,
 }
 #pragma GCC pop_options
 
+// reachedPortable's comparisons, four lanes at once (ordered: false with a NaN, as there).
+PBD_AVX2 void reachedAvx2(const Particles& p, int begin, int end, const PathBox* box,
+                          const PathBox* obstacle, int count, const PathBox& bounds,
+                          std::uint64_t* reach, unsigned char* inside) {
+  const double* inverse_mass = p.inverse_mass.data();
+  const __m256d bounds_lo = _mm256_load_pd(bounds.lo), bounds_hi = _mm256_load_pd(bounds.hi);
+  for (int i = begin; i < end; ++i) {
+    if (inverse_mass[i] == 0.0) continue;
+    const __m256d l = _mm256_load_pd(box[i - begin].lo);
+    const __m256d h = _mm256_load_pd(box[i - begin].hi);
+    std::uint64_t bits = 0;
+    for (int q = 0; q < count; ++q) {
+      const __m256d apart =
+          _mm256_or_pd(_mm256_cmp_pd(h, _mm256_load_pd(obstacle[q].lo), _CMP_LT_OQ),
+                       _mm256_cmp_pd(l, _mm256_load_pd(obstacle[q].hi), _CMP_GT_OQ));
+      bits |= static_cast<std::uint64_t>(_mm256_movemask_pd(apart) == 0) << q;
+    }
+    reach[i - begin] = bits;
+    const __m256d in = _mm256_and_pd(_mm256_cmp_pd(l, bounds_lo, _CMP_GE_OQ),
+                                     _mm256_cmp_pd(h, bounds_hi, _CMP_LE_OQ));
+    inside[i - begin] = _mm256_movemask_pd(in) == 0xF;
+  }
+}
+
 __attribute__((flatten)) PBD_AVX2 bool pathBoxesAvx2(const Particles& p, int begin, int end,
                                                      PathBox* box, Eigen::Array3d& lo,
                                                      Eigen::Array3d& hi) {
@@ -118,6 +164,33 @@ PathBoxKernel bestPathBoxKernel(bool simd, bool avx512) {
   (void)avx512;
 #endif
   return PathBoxKernel::kPortable;
+}
+
+PathBox boxOfBounds(const Vec3& lo, const Vec3& hi) {
+  PathBox box;
+  for (int d = 0; d < 3; ++d) {
+    box.lo[d] = lo[d];
+    box.hi[d] = hi[d];
+  }
+  box.lo[3] = -std::numeric_limits<double>::infinity();
+  box.hi[3] = std::numeric_limits<double>::infinity();
+  return box;
+}
+
+void reachedObstacles(PathBoxKernel kernel, const Particles& particles, int begin, int end,
+                      const PathBox* box, const PathBox* obstacle, int count, const PathBox& bounds,
+                      std::uint64_t* reach, unsigned char* inside) {
+  count = std::min(count, kMostReachTests);
+#ifdef PBD_CLOTH_HAVE_AVX2_PATH
+  // (AVX-512VL adds nothing here: the boxes are whole aligned registers already.)
+  if (kernel != PathBoxKernel::kPortable) {
+    reachedAvx2(particles, begin, end, box, obstacle, count, bounds, reach, inside);
+    return;
+  }
+#else
+  (void)kernel;
+#endif
+  reachedPortable(particles, begin, end, box, obstacle, count, bounds, reach, inside);
 }
 
 bool computePathBoxes(PathBoxKernel kernel, const Particles& particles, int begin, int end,

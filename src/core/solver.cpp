@@ -427,7 +427,8 @@ double Solver::projectStretch(double h, Particles& p, const ClothTopology& topol
 // Isometric bending as the vector constraint C = scale b, b = sum_k K_k x_k (particles.h): linear
 // in the positions, grad_k C = scale K_k I. A flat hinge (b = 0) gets no correction; nothing is
 // divided by |b|, so there is no degenerate case.
-double Solver::projectBend(double h, Particles& p, const ClothTopology& topology, bool first_pass) {
+double Solver::projectBend(double h, Particles& p, const ClothTopology& topology, bool first_pass,
+                           bool last_pass) {
   if (bend_compliance_ < 0.0 || config_.method == Method::kMassSpring) return 0.0;
   const bool xpbd = config_.method == Method::kXpbd;
   const bool jacobi = config_.ordering == Ordering::kJacobi;
@@ -436,7 +437,7 @@ double Solver::projectBend(double h, Particles& p, const ClothTopology& topology
   const double k = xpbd ? 1.0 : pbdStiffness(config_.bend_stiffness);
   double max_change = 0.0;
   const int count = static_cast<int>(topology.bend.size());
-  if (flatBend(topology)) return projectFlatBend(p, topology, first_pass);
+  if (flatBend(topology)) return projectFlatBend(p, topology, first_pass, last_pass);
   const bool has_rest = !topology.bend_rest.empty();
   for (int c = 0; c < count; ++c) {
     const BendConstraint& con = topology.bend[c];
@@ -486,14 +487,15 @@ double Solver::projectBend(double h, Particles& p, const ClothTopology& topology
 // The hinges of a flat rest shape (every grid hinge) in Gauss-Seidel order, with what is fixed
 // for a step computed once in prepareBendStep (flat_hinges.h): the same projection as the loop of
 // projectBend, with no division and no per-vertex weight arithmetic in the pass.
-double Solver::projectFlatBend(Particles& p, const ClothTopology& topology, bool first_pass) {
+double Solver::projectFlatBend(Particles& p, const ClothTopology& topology, bool first_pass,
+                               bool last_pass) {
   if (topology.bend.empty()) return 0.0;  // (and no multipliers to point at)
   double* x = p.position.front().data();
   const bool track_change = tracksLargestChange();
   // Hinges [begin, end) in order.
   auto sweep = [&](int begin, int end) {
-    return projectFlatHinges(flat_hinges_.data() + begin, end - begin, first_pass, track_change,
-                             config_.simd, config_.avx512, x,
+    return projectFlatHinges(flat_hinges_.data() + begin, end - begin, first_pass, !last_pass,
+                             track_change, config_.simd, config_.avx512, x,
                              bend_lambda_.front().data() + 3 * static_cast<std::size_t>(begin));
   };
   const int threads = pool_.threads();
@@ -610,7 +612,7 @@ void Solver::countJacobiConstraints(const Particles& p, const ClothTopology& top
 }
 
 double Solver::projectPass(double h, Particles& p, const ClothTopology& topology,
-                           Collisions& collisions, bool first_pass) {
+                           Collisions& collisions, bool first_pass, bool last_pass) {
   // The count of the last pass is what the step reports: constraints still degenerate at its end.
   startDegenerateCount();
   // Long-range levels first (solver.levels): they remove in one projection a stretch spread over
@@ -622,7 +624,7 @@ double Solver::projectPass(double h, Particles& p, const ClothTopology& topology
                                  config_.avx512);
   }
   max_change = std::max(max_change, projectStretch(h, p, topology, first_pass));
-  max_change = std::max(max_change, projectBend(h, p, topology, first_pass));
+  max_change = std::max(max_change, projectBend(h, p, topology, first_pass, last_pass));
   if (config_.ordering == Ordering::kJacobi) applyJacobi(p, max_change);
   max_change = std::max(max_change, projectTethers(p, topology));
   // Contacts last in each pass so the positions a pass ends with are free of penetration.
@@ -877,7 +879,8 @@ void Solver::step(double dt, Particles& p, const ClothTopology& topology, Collis
         std::swap(chebyshev_previous_, chebyshev_current_);  // no copy: the buffers trade places
         chebyshev_current_ = p.position;                     // same size: no allocation
       }
-      const double max_change = projectPass(h, p, topology, collisions, pass == 0);
+      const double max_change =
+          projectPass(h, p, topology, collisions, pass == 0, pass + 1 == config_.iterations);
       if (pass >= 1 && chebyshevKeeps(pass)) omega = accelerate(pass, omega, p);
       // Adaptive count (seed: "measuring the change from last iteration").
       if (tracksLargestChange() && max_change < config_.tolerance) break;

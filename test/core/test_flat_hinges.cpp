@@ -120,7 +120,7 @@ TEST(FlatHinges, OneProjectionFlattensAHingeAtTheEndOfTheArray) {
     const bool simd = path > 0, avx512 = path == 2;
     std::vector<double> x = start, lambda(3, 0.0);
     const double moved =
-        projectFlatHinges(&step, 1, false, true, simd, avx512, x.data(), lambda.data());
+        projectFlatHinges(&step, 1, false, true, true, simd, avx512, x.data(), lambda.data());
     EXPECT_GT(moved, 0.01);
     for (int d = 0; d < 3; ++d) {
       double b = 0.0;
@@ -140,11 +140,25 @@ TEST(FlatHinges, OneProjectionFlattensAHingeAtTheEndOfTheArray) {
     // Untracked, and with the multipliers written instead of read (a substep's first pass, over
     // a stale value): the same positions and multipliers, and no change reported.
     std::vector<double> untracked = start, untracked_lambda(3, 7.0);
-    EXPECT_EQ(projectFlatHinges(&step, 1, true, false, simd, avx512, untracked.data(),
+    EXPECT_EQ(projectFlatHinges(&step, 1, true, true, false, simd, avx512, untracked.data(),
                                 untracked_lambda.data()),
               0.0);
     EXPECT_EQ(untracked, x);
     EXPECT_EQ(untracked_lambda, lambda);
+    // A substep's last pass (keep_multipliers false), first or later: the same positions, and the
+    // multiplier written only by a hinge with a kinematic reaction to give.
+    for (bool reaction : {false, true}) {
+      for (bool from_zero : {true, false}) {
+        FlatHinge last = step;
+        last.reaction = reaction;
+        std::vector<double> last_x = start, last_lambda(3, from_zero ? 7.0 : 0.0);
+        projectFlatHinges(&last, 1, from_zero, false, false, simd, avx512, last_x.data(),
+                          last_lambda.data());
+        EXPECT_EQ(last_x, x) << "path " << path;
+        EXPECT_EQ(last_lambda, reaction ? lambda : std::vector<double>(3, from_zero ? 7.0 : 0.0))
+            << "path " << path << ", reaction " << reaction << ", from zero " << from_zero;
+      }
+    }
     result[path] = x;
   }
   EXPECT_EQ(result[0], result[1]);
@@ -153,6 +167,44 @@ TEST(FlatHinges, OneProjectionFlattensAHingeAtTheEndOfTheArray) {
 
 // A rope (one row: no triangles, no hinges) with bending on steps on both paths: no hinge to
 // project and no multiplier to point at (the sanitizer build checks that nothing reads one).
+// The substep's last pass writes the multipliers only of hinges marked `reaction`, so the mark
+// must be on every hinge the kinematic reactions read (Solver::startReactions: a corner
+// kinematic, another free) and on no other: on a 12 x 12 cloth with its two top corners pinned
+// and one particle between them grasped (inverse mass 0), each hinge's mark is what its corners
+// say, the marked ones include hinges of all three, and a hinge of only kinematic corners (none
+// free: skipped) is not marked.
+TEST(FlatHinges, ReactionMarksTheHingesWithKinematicAndFreeCorners) {
+  SceneConfig scene = test::clothScene(12, 12, 0.05, Method::kXpbd);
+  scene.cloth.bend_compliance = 1e-4;
+  scene.cloth.self_collision = false;
+  scene.cloth.pinned = {0, 11};
+  Simulation sim(scene);
+  std::vector<double> inverse_mass = sim.particles().inverse_mass;
+  inverse_mass[5] = 0.0;
+  const auto& bend = sim.topology().bend;
+  ASSERT_GT(bend.size(), 100u);
+  int marked = 0;
+  bool marks[3] = {false, false, false};  // corners 0, 11 and 5
+  for (const BendConstraint& con : bend) {
+    const FlatHinge hinge = makeFlatHinge(con, inverse_mass.data(), 1e-2, 1.0, 1e-300);
+    int kinematic = 0;
+    for (int v = 0; v < 4; ++v) kinematic += inverse_mass[con.index[v]] == 0.0;
+    EXPECT_EQ(hinge.reaction, kinematic > 0 && kinematic < 4);
+    if (!hinge.reaction) continue;
+    ++marked;
+    for (int v = 0; v < 4; ++v) {
+      marks[0] |= con.index[v] == 0;
+      marks[1] |= con.index[v] == 11;
+      marks[2] |= con.index[v] == 5;
+    }
+  }
+  EXPECT_GE(marked, 5);
+  EXPECT_TRUE(marks[0] && marks[1] && marks[2]);
+  BendConstraint all_kinematic = bend.front();
+  std::vector<double> none_free(inverse_mass.size(), 0.0);
+  EXPECT_FALSE(makeFlatHinge(all_kinematic, none_free.data(), 1e-2, 1.0, 1e-300).reaction);
+}
+
 TEST(FlatHinges, AClothWithoutHingesSteps) {
   for (bool simd : {true, false}) {
     SceneConfig scene = test::clothScene(1, 20, 0.05, Method::kXpbd);

@@ -14,6 +14,8 @@
 #include "mesh_builders.h"
 #include "pbd_cloth/path_boxes.h"
 #include "pbd_cloth/shapes.h"
+#include "pbd_cloth/simulation.h"
+#include "test_scenes.h"
 
 namespace pbd_cloth {
 namespace {
@@ -111,6 +113,61 @@ TEST(PathBoxes, BoxesHoldThePathsAndTheUnionTheBoxes) {
   }
 }
 
+// reachedObstacles: for each free particle, a bit for each obstacle box its path box shares a
+// point with and whether it lies inside the bounds, the same from every kernel and the same as
+// the boxes' definitions say (compared coordinate by coordinate here); a box with a NaN lies
+// inside nothing; kinematic particles' slots are left alone.
+TEST(PathBoxes, ReachedObstaclesAreThoseTheBoxesShareAPointWith) {
+  std::mt19937 rng(3);
+  const int n = 32;
+  Particles p = randomParticles(n, rng);
+  p.inverse_mass[9] = 0.0;
+  p.position[17].z() = std::numeric_limits<double>::quiet_NaN();
+  std::uniform_real_distribution<double> corner(-2.0, 1.0), size(1.0, 2.5);
+  std::vector<PathBox> obstacle;
+  for (int q = 0; q < 5; ++q) {
+    const Vec3 lo(corner(rng), corner(rng), corner(rng));
+    obstacle.push_back(boxOfBounds(lo, lo + Vec3(size(rng), size(rng), size(rng))));
+  }
+  const PathBox bounds = boxOfBounds(Vec3(-1.5, -1.5, -1.5), Vec3(1.5, 1.5, 1.5));
+  std::vector<PathBoxKernel> kernels = {PathBoxKernel::kPortable};
+  if (bestPathBoxKernel(true, true) != PathBoxKernel::kPortable) {
+    kernels.push_back(bestPathBoxKernel(true, true));
+  }
+  int reached = 0, inside_count = 0;
+  for (PathBoxKernel kernel : kernels) {
+    PathBox box[n];
+    Eigen::Array3d lo, hi;
+    computePathBoxes(kernel, p, 0, n, box, lo, hi);
+    std::uint64_t reach[n];
+    unsigned char inside[n];
+    reach[9] = 99;
+    inside[9] = 7;
+    reachedObstacles(kernel, p, 0, n, box, obstacle.data(), 5, bounds, reach, inside);
+    EXPECT_EQ(reach[9], 99u);
+    EXPECT_EQ(inside[9], 7);
+    for (int i = 0; i < n; ++i) {
+      if (i == 9) continue;
+      const Eigen::Array3d l = box[i].low(), h = box[i].high();
+      for (int q = 0; q < 5; ++q) {
+        const Eigen::Array3d ol = obstacle[q].low(), oh = obstacle[q].high();
+        const bool apart = (h < ol).any() || (l > oh).any();
+        EXPECT_EQ((reach[i] >> q) & 1u, apart ? 0u : 1u)
+            << "kernel " << static_cast<int>(kernel) << " particle " << i << " obstacle " << q;
+        reached += !apart;
+      }
+      EXPECT_EQ(inside[i] != 0, (l >= bounds.low()).all() && (h <= bounds.high()).all())
+          << "kernel " << static_cast<int>(kernel) << " particle " << i;
+      inside_count += inside[i] != 0;
+    }
+    EXPECT_EQ(inside[17], 0);
+  }
+  // Both answers occur (else the comparison above would prove little).
+  EXPECT_GT(reached, 10);
+  EXPECT_LT(reached, 5 * 31 * static_cast<int>(kernels.size()));
+  EXPECT_GT(inside_count, 5);
+}
+
 Shape testShape(ShapeType type) {
   Shape shape;
   shape.type = type;
@@ -205,6 +262,37 @@ TEST(BoundingRadius, HoldsEveryShapeAndBoundsItsDistance) {
     }
   }
   EXPECT_TRUE(std::isinf(boundingRadius(testShape(ShapeType::kPlane))));
+}
+
+// A block of particles whose boxes reach more obstacles than reachedObstacles has bits for
+// (kMostReachTests): a 4 x 8 cloth, one block of 32, drops 9 cm onto a floor of 80 slabs
+// listed row by row, those under its first row from index 70 on. Every particle comes to rest on
+// its slab (none falls through, as it would if the obstacles past the bits were not tested), at
+// the slab's top plus its radius.
+TEST(ObstacleCulls, ABlockNearMoreObstaclesThanTheBitsTestsThemAll) {
+  SceneConfig scene = test::clothScene(4, 8, 0.06, Method::kXpbd);
+  scene.solver.substeps = 10;
+  scene.cloth.origin = Eigen::Vector3d(-0.21, 0.09, 0.1);
+  scene.cloth.thickness = 0.004;
+  for (int j = 0; j < 8; ++j) {
+    for (int i = 0; i < 10; ++i) {
+      ObstacleConfig slab;
+      slab.name = "slab" + std::to_string(10 * j + i);
+      slab.shape = ShapeType::kBox;
+      slab.size = Eigen::Vector3d(0.05, 0.025, 0.02);
+      slab.pose.position = Eigen::Vector3d(-0.225 + 0.05 * i, -0.0875 + 0.025 * j, 0.0);
+      scene.obstacles.push_back(slab);
+    }
+  }
+  ASSERT_GT(static_cast<int>(scene.obstacles.size()), kMostReachTests);
+  Simulation sim(scene);
+  const Particles& p = sim.particles();
+  ASSERT_EQ(p.size(), 32);
+  EXPECT_NEAR(p.position[0].y(), 0.09, 1e-12);  // the first row over slabs 70 to 79
+  for (int step = 0; step < 60; ++step) sim.step();
+  for (int i = 0; i < p.size(); ++i) {
+    EXPECT_NEAR(p.position[i].z(), 0.01 + p.radius[i], 0.2 * p.radius[i]) << "particle " << i;
+  }
 }
 
 }  // namespace
