@@ -52,6 +52,10 @@ PathBoxKernel bestPathBoxKernel(bool simd, bool avx512);
 // whose minimum and maximum drop a NaN, then does not hold it. Allocates nothing.
 bool computePathBoxes(PathBoxKernel kernel, const Particles& particles, int begin, int end,
                       PathBox* box, Eigen::Array3d& lo, Eigen::Array3d& hi);
+// The same from `start` instead of substep_start: with start = position, each particle's sphere's
+// box x -/+ r (min(x, x) is x), as the pre-stabilization culls by.
+bool computePathBoxes(PathBoxKernel kernel, const Particles& particles, const Vec3Array& start,
+                      int begin, int end, PathBox* box, Eigen::Array3d& lo, Eigen::Array3d& hi);
 
 // A world box [lo, hi] in PathBox's lanes, lane 3 from -inf to +inf so that it neither keeps a
 // particle's box out nor leaves one outside (an obstacle's bounds, the scene's bounds).

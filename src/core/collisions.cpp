@@ -433,20 +433,15 @@ void Collisions::preStabilizeObstacles(Particles& p, double max_shift) {
   // order, until a shift moves it: from there on every later obstacle, as a loop over all of
   // them would. The same shifts and allowances as testing every pair, at a cost that grows with
   // the particles near each obstacle, not with particles times obstacles.
-  const double inf = std::numeric_limits<double>::infinity();
   int* near = near_obstacles_.data();
   for (int block = 0; block < p.size(); block += kCullBlock) {
     const int block_end = std::min(p.size(), block + kCullBlock);
-    Eigen::Array3d lo = Eigen::Array3d::Constant(inf), hi = Eigen::Array3d::Constant(-inf);
-    bool every = false;
-    for (int i = block; i < block_end; ++i) {
-      if (p.inverse_mass[i] == 0.0) continue;
-      const Eigen::Array3d sphere_lo = p.position[i].array() - p.radius[i];
-      const Eigen::Array3d sphere_hi = p.position[i].array() + p.radius[i];
-      every = every || !(sphere_lo <= sphere_hi).all();  // not a number: every obstacle
-      lo = lo.min(sphere_lo);
-      hi = hi.max(sphere_hi);
-    }
+    // The spheres' boxes x -/+ r: path boxes from x to x (computePathBoxes); `every` when one
+    // has a coordinate not a number.
+    PathBox box[kCullBlock];
+    Eigen::Array3d lo, hi;
+    const bool every =
+        computePathBoxes(path_box_kernel_, p, p.position, block, block_end, box, lo, hi);
     const int near_count = listNearObstacles(lo, hi, every, near);
     if (near_count == 0) continue;
     for (int i = block; i < block_end; ++i) {

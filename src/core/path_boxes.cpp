@@ -12,8 +12,8 @@ namespace pbd_cloth {
 
 namespace {
 
-bool pathBoxesPortable(const Particles& p, int begin, int end, PathBox* box, Eigen::Array3d& lo,
-                       Eigen::Array3d& hi) {
+bool pathBoxesPortable(const Particles& p, const Vec3Array& start, int begin, int end, PathBox* box,
+                       Eigen::Array3d& lo, Eigen::Array3d& hi) {
   const double inf = std::numeric_limits<double>::infinity();
   lo = Eigen::Array3d::Constant(inf);
   hi = Eigen::Array3d::Constant(-inf);
@@ -21,7 +21,7 @@ bool pathBoxesPortable(const Particles& p, int begin, int end, PathBox* box, Eig
   for (int i = begin; i < end; ++i) {
     if (p.inverse_mass[i] == 0.0) continue;
     Eigen::Array3d particle_lo, particle_hi;
-    pathBox(p.position[i], p.substep_start[i], p.radius[i], particle_lo, particle_hi);
+    pathBox(p.position[i], start[i], p.radius[i], particle_lo, particle_hi);
     PathBox& b = box[i - begin];
     for (int d = 0; d < 3; ++d) {
       b.lo[d] = particle_lo[d];
@@ -82,10 +82,10 @@ struct Avx512VlXyz {
 #pragma GCC push_options
 #pragma GCC target("avx2")
 template <class A>
-inline bool pathBoxesSimd(const Particles& p, int begin, int end, PathBox* box,
-                          Eigen::Array3d& lo_out, Eigen::Array3d& hi_out) {
+inline bool pathBoxesSimd(const Particles& p, const Vec3Array& start_array, int begin, int end,
+                          PathBox* box, Eigen::Array3d& lo_out, Eigen::Array3d& hi_out) {
   const double* x = p.position.data()->data();
-  const double* start = p.substep_start.data()->data();
+  const double* start = start_array.data()->data();
   const double* inverse_mass = p.inverse_mass.data();
   const double* radius = p.radius.data();
   __m256d lo = _mm256_set1_pd(std::numeric_limits<double>::infinity());
@@ -137,16 +137,18 @@ PBD_AVX2 void reachedAvx2(const Particles& p, int begin, int end, const PathBox*
   }
 }
 
-__attribute__((flatten)) PBD_AVX2 bool pathBoxesAvx2(const Particles& p, int begin, int end,
-                                                     PathBox* box, Eigen::Array3d& lo,
-                                                     Eigen::Array3d& hi) {
-  return pathBoxesSimd<Avx2Xyz>(p, begin, end, box, lo, hi);
+__attribute__((flatten)) PBD_AVX2 bool pathBoxesAvx2(const Particles& p, const Vec3Array& start,
+                                                     int begin, int end, PathBox* box,
+                                                     Eigen::Array3d& lo, Eigen::Array3d& hi) {
+  return pathBoxesSimd<Avx2Xyz>(p, start, begin, end, box, lo, hi);
 }
 
-__attribute__((flatten)) PBD_AVX512VL bool pathBoxesAvx512Vl(const Particles& p, int begin, int end,
-                                                             PathBox* box, Eigen::Array3d& lo,
+__attribute__((flatten)) PBD_AVX512VL bool pathBoxesAvx512Vl(const Particles& p,
+                                                             const Vec3Array& start, int begin,
+                                                             int end, PathBox* box,
+                                                             Eigen::Array3d& lo,
                                                              Eigen::Array3d& hi) {
-  return pathBoxesSimd<Avx512VlXyz>(p, begin, end, box, lo, hi);
+  return pathBoxesSimd<Avx512VlXyz>(p, start, begin, end, box, lo, hi);
 }
 #endif
 
@@ -195,19 +197,24 @@ void reachedObstacles(PathBoxKernel kernel, const Particles& particles, int begi
 
 bool computePathBoxes(PathBoxKernel kernel, const Particles& particles, int begin, int end,
                       PathBox* box, Eigen::Array3d& lo, Eigen::Array3d& hi) {
+  return computePathBoxes(kernel, particles, particles.substep_start, begin, end, box, lo, hi);
+}
+
+bool computePathBoxes(PathBoxKernel kernel, const Particles& particles, const Vec3Array& start,
+                      int begin, int end, PathBox* box, Eigen::Array3d& lo, Eigen::Array3d& hi) {
 #ifdef PBD_CLOTH_HAVE_AVX2_PATH
   switch (kernel) {
     case PathBoxKernel::kAvx512Vl:
-      return pathBoxesAvx512Vl(particles, begin, end, box, lo, hi);
+      return pathBoxesAvx512Vl(particles, start, begin, end, box, lo, hi);
     case PathBoxKernel::kAvx2:
-      return pathBoxesAvx2(particles, begin, end, box, lo, hi);
+      return pathBoxesAvx2(particles, start, begin, end, box, lo, hi);
     case PathBoxKernel::kPortable:
       break;
   }
 #else
   (void)kernel;
 #endif
-  return pathBoxesPortable(particles, begin, end, box, lo, hi);
+  return pathBoxesPortable(particles, start, begin, end, box, lo, hi);
 }
 
 }  // namespace pbd_cloth

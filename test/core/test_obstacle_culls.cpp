@@ -86,9 +86,9 @@ TEST(PathBoxes, KernelsAgreeToTheBit) {
   }
 }
 
-// The boxes are what they are defined to be: min(start, x) - r and max(start, x) + r, the union
-// holds every free particle's box and only those, and a block of kinematic particles has the
-// empty union (+inf, -inf).
+// The boxes are what they are defined to be: min(start, x) - r and max(start, x) + r (x -/+ r
+// with the positions as the start), the union holds every free particle's box and only those,
+// and a block of kinematic particles has the empty union (+inf, -inf).
 TEST(PathBoxes, BoxesHoldThePathsAndTheUnionTheBoxes) {
   Particles p;
   p.resize(3);
@@ -106,6 +106,10 @@ TEST(PathBoxes, BoxesHoldThePathsAndTheUnionTheBoxes) {
     EXPECT_EQ(box[1].high().matrix(), Vec3(-0.75, 0.75, 0.75));
     EXPECT_EQ(lo.matrix(), Vec3(-1.75, 0.0, -0.25));
     EXPECT_EQ(hi.matrix(), Vec3(1.125, 5.125, 3.125));
+    // From the positions themselves: each particle's sphere's box, x -/+ r.
+    EXPECT_FALSE(computePathBoxes(kernel, p, p.position, 0, 3, box, lo, hi));
+    EXPECT_EQ(box[0].low().matrix(), Vec3(0.875, 1.875, 2.875));
+    EXPECT_EQ(box[1].high().matrix(), Vec3(-0.75, 0.75, 0.25));
     Eigen::Array3d none_lo, none_hi;
     EXPECT_FALSE(computePathBoxes(kernel, p, 2, 3, box, none_lo, none_hi));
     EXPECT_TRUE((none_lo == std::numeric_limits<double>::infinity()).all());
