@@ -493,14 +493,21 @@ def target_met(ms, goal, fallback):
                                      else 'no')
 
 
-def machine_yardstick(swinging, swinging100, cheapest_both):
-    """Targets 1 and 2 scaled to the issue's machine by Bullet 16 x 10's time in this run."""
+def bullet_factors(swinging):
+    """How much faster this machine ran than the issue's: (curve, Bullet 16 x 10's ms here, the
+    issue's ms over that), both diagonals first (the issue's own link set), then one diagonal."""
     factors = []
     for curve, issue_ms in ISSUE_BULLET_MS.items():
         run = next((r for r in swinging if r['curve'] == curve and r['substeps'] == 16 and
                     r['iterations'] == 10), None)
         if run:
             factors.append((curve, run['wall_ms_per_step'], issue_ms / run['wall_ms_per_step']))
+    return factors
+
+
+def machine_yardstick(swinging, swinging100, cheapest_both):
+    """Targets 1 and 2 scaled to the issue's machine by Bullet 16 x 10's time in this run."""
+    factors = bullet_factors(swinging)
     if not factors:
         return None
     factor = factors[0][2]  # the issue's own link set (both diagonals)
@@ -574,6 +581,24 @@ def issue12_summary(add, data_dir, swinging, swinging100, fabric, towel, micro):
                     '| %s |' % (curve, goal, fmt_ms(run['wall_ms_per_step']),
                                 fmt_ms(run['cpu_ms_per_step']),
                                 'yes' if run['wall_ms_per_step'] <= goal else 'no'))
+        # One thread, scaled to the issue's machine as targets 1 and 2 are: by Bullet's time on
+        # both diagonals (the verdict), and on one (shown beside it).
+        factors = bullet_factors(swinging) if swinging else []
+        runs = [(next((r for r in fabric if r['curve'] == curve), None), goal)
+                for curve, goal in (('xpbd', 1.5), ('xpbd + self-collision', 3.0))]
+        if factors and all(run for run, _ in runs):
+            scaled = [[run['wall_ms_per_step'] * f for run, _ in runs] for _, _, f in factors]
+            add('| 3 | fabric_table.yaml on the issue\'s machine, one thread, scaled by Bullet 16 x 10 '
+                'as targets 1 and 2 (x%.2f%s): <= 1.5 ms, <= 3 ms with self-collision | %s and %s%s '
+                '| %s |' % (
+                    factors[0][2],
+                    '; x%.2f on one diagonal' % factors[1][2] if len(factors) > 1 else '',
+                    fmt_ms(scaled[0][0]), fmt_ms(scaled[0][1]),
+                    ' (on one diagonal\'s scale %s and %s)' % (fmt_ms(scaled[1][0]),
+                                                              fmt_ms(scaled[1][1]))
+                    if len(scaled) > 1 else '',
+                    ', '.join('yes' if ms <= goal else 'no'
+                              for ms, (_, goal) in zip(scaled[0], runs))))
     pairs = [(swinging, 'xpbd + levels', 'xpbd + levels, 2 threads', '50 x 50 swinging'),
              (swinging100, 'xpbd + levels', 'xpbd + levels, 2 threads', '100 x 100 swinging'),
              (fabric, 'xpbd', 'xpbd, 2 threads', 'fabric_table'),
