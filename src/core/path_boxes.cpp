@@ -62,25 +62,44 @@ void reachedPortable(const Particles& p, int begin, int end, const PathBox* box,
 #define PBD_AVX2 __attribute__((target("avx2")))
 #define PBD_AVX512VL __attribute__((target("avx512f,avx512vl")))
 
+// What the kernel does to registers, in functions compiled for the instruction set (the kernel
+// below is generic code, inlined into each target's function by `flatten`, and passes registers
+// by reference only: a vector passed by value outside an AVX function changes the ABI, and
+// neither compiler expands an AVX intrinsic in a function not compiled for AVX).
+// The operand order of the minimum and the maximum matches std::min and std::max (and so
+// Eigen's): vminpd(a, b) is a < b ? a : b, so min(x, start) = std::min(x, start) is
+// vminpd(start, x), and the union's std::min(lo, box) is vminpd(box, lo): the same choices, NaN
+// and signed zeros included, as the portable loop's.
+struct Avx2Registers {
+  PBD_AVX2 static void broadcast(double value, __m256d& r) { r = _mm256_set1_pd(value); }
+  PBD_AVX2 static void min(const __m256d& a, const __m256d& b, __m256d& r) {
+    r = _mm256_min_pd(a, b);
+  }
+  PBD_AVX2 static void max(const __m256d& a, const __m256d& b, __m256d& r) {
+    r = _mm256_max_pd(a, b);
+  }
+  PBD_AVX2 static void store(double* p, const __m256d& r) { _mm256_store_pd(p, r); }
+  // not_box |= !(lo <= hi), lane by lane (unordered: true with a NaN).
+  PBD_AVX2 static void orNotBox(const __m256d& lo, const __m256d& hi, __m256d& not_box) {
+    not_box = _mm256_or_pd(not_box, _mm256_cmp_pd(lo, hi, _CMP_NLE_UQ));
+  }
+  PBD_AVX2 static bool anyXyz(const __m256d& r) { return (_mm256_movemask_pd(r) & 0x7) != 0; }
+};
+
 // How a register takes one particle's x y z (lane 3 zero); neither reads the double after z, so
 // the array's last particle is safe. AVX2: a 16-byte and an 8-byte load; AVX-512VL: one masked
 // load of three lanes.
-struct Avx2Xyz {
-  PBD_AVX2 static __m256d load(const double* p) {
-    return _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(p)), _mm_load_sd(p + 2), 1);
+struct Avx2Xyz : Avx2Registers {
+  PBD_AVX2 static void load(const double* p, __m256d& r) {
+    r = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(p)), _mm_load_sd(p + 2), 1);
   }
 };
-struct Avx512VlXyz {
-  PBD_AVX512VL static __m256d load(const double* p) { return _mm256_maskz_loadu_pd(0x7, p); }
+struct Avx512VlXyz : Avx2Registers {
+  PBD_AVX512VL static void load(const double* p, __m256d& r) { r = _mm256_maskz_loadu_pd(0x7, p); }
 };
 
-// pathBoxesPortable's operations lane by lane. The operand order matches std::min and std::max
-// (and so Eigen's): vminpd(a, b) is a < b ? a : b, so min(x, start) = std::min(x, start) is
-// vminpd(start, x), and the union's std::min(lo, box) is vminpd(box, lo): the same choices,
-// NaN and signed zeros included, as the portable loop's.
-// (Compiled for AVX2, which both callers have, so that its intrinsics expand in it.)
-#pragma GCC push_options
-#pragma GCC target("avx2")
+// pathBoxesPortable's operations lane by lane (the difference and the sum through GCC's vector
+// operators, compiled to the caller's instruction set: exact, as the scalar ones).
 template <class A>
 inline bool pathBoxesSimd(const Particles& p, const Vec3Array& start_array, int begin, int end,
                           PathBox* box, Eigen::Array3d& lo_out, Eigen::Array3d& hi_out) {
@@ -88,30 +107,32 @@ inline bool pathBoxesSimd(const Particles& p, const Vec3Array& start_array, int 
   const double* start = start_array.data()->data();
   const double* inverse_mass = p.inverse_mass.data();
   const double* radius = p.radius.data();
-  __m256d lo = _mm256_set1_pd(std::numeric_limits<double>::infinity());
-  __m256d hi = _mm256_set1_pd(-std::numeric_limits<double>::infinity());
-  __m256d not_box = _mm256_setzero_pd();
+  __m256d lo, hi, not_box, xi, si, r, smaller, larger;
+  A::broadcast(std::numeric_limits<double>::infinity(), lo);
+  A::broadcast(-std::numeric_limits<double>::infinity(), hi);
+  A::broadcast(0.0, not_box);
   for (int i = begin; i < end; ++i) {
     if (inverse_mass[i] == 0.0) continue;
-    const __m256d xi = A::load(x + 3 * static_cast<std::ptrdiff_t>(i));
-    const __m256d si = A::load(start + 3 * static_cast<std::ptrdiff_t>(i));
-    const __m256d r = _mm256_set1_pd(radius[i]);
-    const __m256d l = _mm256_sub_pd(_mm256_min_pd(si, xi), r);
-    const __m256d h = _mm256_add_pd(_mm256_max_pd(si, xi), r);
-    _mm256_store_pd(box[i - begin].lo, l);
-    _mm256_store_pd(box[i - begin].hi, h);
-    not_box = _mm256_or_pd(not_box, _mm256_cmp_pd(l, h, _CMP_NLE_UQ));  // !(lo <= hi)
-    lo = _mm256_min_pd(l, lo);
-    hi = _mm256_max_pd(h, hi);
+    A::load(x + 3 * static_cast<std::ptrdiff_t>(i), xi);
+    A::load(start + 3 * static_cast<std::ptrdiff_t>(i), si);
+    A::broadcast(radius[i], r);
+    A::min(si, xi, smaller);
+    A::max(si, xi, larger);
+    const __m256d l = smaller - r;
+    const __m256d h = larger + r;
+    A::store(box[i - begin].lo, l);
+    A::store(box[i - begin].hi, h);
+    A::orNotBox(l, h, not_box);
+    A::min(l, lo, lo);
+    A::max(h, hi, hi);
   }
   alignas(32) double lo_lanes[4], hi_lanes[4];
-  _mm256_store_pd(lo_lanes, lo);
-  _mm256_store_pd(hi_lanes, hi);
+  A::store(lo_lanes, lo);
+  A::store(hi_lanes, hi);
   lo_out = Eigen::Map<const Eigen::Array3d>(lo_lanes);
   hi_out = Eigen::Map<const Eigen::Array3d>(hi_lanes);
-  return (_mm256_movemask_pd(not_box) & 0x7) != 0;
+  return A::anyXyz(not_box);
 }
-#pragma GCC pop_options
 
 // reachedPortable's comparisons, four lanes at once (ordered: false with a NaN, as there).
 PBD_AVX2 void reachedAvx2(const Particles& p, int begin, int end, const PathBox* box,
