@@ -48,6 +48,14 @@ struct BendConstraint {
   double scale = 0.0;                       // sqrt(6 / (A0 + A1))
 };
 
+// A hinge with a kinematic corner and a free one: its multiplier is a reaction on the kinematic
+// corner (Solver::startReactions lists these hinges; makeFlatHinge marks them).
+inline bool joinsKinematicToFree(const BendConstraint& con, const double* inverse_mass) {
+  int kinematic = 0;
+  for (int v = 0; v < 4; ++v) kinematic += inverse_mass[con.index[v]] == 0.0;
+  return kinematic > 0 && kinematic < 4;
+}
+
 // Rest term of a hinge of a mesh cloth whose rest shape is not flat (cloth.mesh): the rest
 // mean-curvature vector b0, stored as its components in the frames of the hinge's two triangles
 // (edge direction, in-plane normal to the edge, triangle normal). The projection asks for

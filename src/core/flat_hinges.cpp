@@ -186,10 +186,7 @@ FlatHinge makeFlatHinge(const BendConstraint& con, const double* inverse_mass, d
                         double k, double min_weight) {
   FlatHinge hinge;
   double w = 0.0, largest = 0.0;
-  int kinematic = 0;
-  for (int v = 0; v < 4; ++v) kinematic += inverse_mass[con.index[v]] == 0.0;
-  // (Solver::startReactions lists the same hinges: kinematic_bend_.)
-  const bool reaction = kinematic > 0 && kinematic < 4;
+  const bool reaction = joinsKinematicToFree(con, inverse_mass);
   for (int v = 0; v < 4; ++v) {
     const double wv = inverse_mass[con.index[v]];
     w += wv * con.weight[v] * con.weight[v];

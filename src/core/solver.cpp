@@ -755,9 +755,7 @@ void Solver::startReactions(const Particles& p, const ClothTopology& topology, b
   if (bend_compliance_ < 0.0) return;
   const int bend_count = static_cast<int>(topology.bend.size());
   for (int c = 0; c < bend_count; ++c) {
-    int kinematic = 0;
-    for (int v = 0; v < 4; ++v) kinematic += p.inverse_mass[topology.bend[c].index[v]] == 0.0;
-    if (kinematic > 0 && kinematic < 4) kinematic_bend_.push_back(c);
+    if (joinsKinematicToFree(topology.bend[c], p.inverse_mass.data())) kinematic_bend_.push_back(c);
   }
 }
 
