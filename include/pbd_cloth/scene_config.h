@@ -113,6 +113,10 @@ struct SolverConfig {
   // runs more than this node, and a spinning worker competes with it (doc/performance.md,
   // "Threads").
   int threads = 1;
+  // solver.adaptive_threads: with threads > 1, run a step on the calling thread alone while that is
+  // measured to be faster (another process holds a core), trying all threads again now and then
+  // (thread_choice.h). The same results either way: the partition of the work does not change.
+  bool adaptive_threads = true;
   // solver.search_window: substeps one contact search (particle-particle and self-collision
   // candidates) covers. 0 (the default): chosen per step from the last one's candidates
   // (Collisions, "search window"); k >= 1: every k substeps, a search more wherever a particle

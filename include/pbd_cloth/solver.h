@@ -12,6 +12,7 @@
 #include "pbd_cloth/particles.h"
 #include "pbd_cloth/scene_config.h"
 #include "pbd_cloth/stretch_links.h"
+#include "pbd_cloth/thread_choice.h"
 #include "pbd_cloth/worker_pool.h"
 
 namespace pbd_cloth {
@@ -36,6 +37,9 @@ struct StepStats {
   // (no direction to correct along), and the index of the first of them (-1: none).
   int degenerate_constraints = 0;
   int first_degenerate_constraint = -1;
+  // Threads that ran the last step: solver.threads, or 1 where solver.adaptive_threads chose the
+  // calling thread alone (thread_choice.h); 0 for a step slept through (no solve).
+  int threads_used = 1;
 };
 
 class Solver {
@@ -111,6 +115,7 @@ class Solver {
   // stretch_links_' tasks, balanced by link count): thread t of phase p runs tasks
   // [thread_tasks_[p * (T + 1) + t], thread_tasks_[p * (T + 1) + t + 1]).
   WorkerPool pool_;
+  ThreadChoice thread_choice_;  // solver.adaptive_threads: pool_ solo or not, step by step
   std::vector<int> thread_tasks_;
   std::vector<StretchPassResult> thread_results_;
   void splitTasks();

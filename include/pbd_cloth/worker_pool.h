@@ -15,6 +15,10 @@
 // index does never changes, only which thread runs it, and the indices of one job are independent
 // by contract, so results stay the same. A worker runs only an index opened for the generation it
 // saw, so one started by a new thread count does not run the last job again.
+//
+// Solo (setSolo, solver.adaptive_threads: thread_choice.h): the calling thread runs every index of
+// each job itself, in order, and the workers are not woken (they sleep after their spin). The
+// indices, and so the work each does, are those of threads(): the results are those of the pool.
 #pragma once
 
 #include <atomic>
@@ -52,10 +56,15 @@ class WorkerPool {
     run(job);
   }
 
+  // Solo: the next jobs run every index on the calling thread (see the top of this file).
+  void setSolo(bool solo) { solo_ = solo; }
+  bool solo() const { return solo_ || workers_.empty(); }
+
   template <typename Job>
   void run(Job& job) {
-    if (workers_.empty()) {
-      job(0);
+    if (solo()) {
+      const int n = threads();
+      for (int t = 0; t < n; ++t) job(t);
       return;
     }
     dispatch([](void* context, int t) { (*static_cast<Job*>(context))(t); }, &job);
@@ -76,6 +85,7 @@ class WorkerPool {
   std::atomic<int> pending_{0};
   std::atomic<int> sleeping_{0};
   std::atomic<bool> stop_{false};
+  bool solo_ = false;
   Call call_ = nullptr;
   void* context_ = nullptr;
   std::mutex mutex_;

@@ -515,6 +515,7 @@ void Simulation::step(double dt) {
       stats.step_wall_time = stats.predict_time = stats.collide_time = 0.0;
       stats.project_time = stats.update_time = stats.contact_time = 0.0;
       stats.iterations = 0;
+      stats.threads_used = 0;  // no solve
       last_step_restored_ = false;
       return;
     }

@@ -63,7 +63,10 @@ void Solver::configure(const SolverConfig& solver, const ClothConfig& cloth) {
   if (pool_.threads() != config_.threads) {
     pool_.resize(config_.threads);
     splitTasks();
+    thread_choice_.reset();
   }
+  if (!config_.adaptive_threads) thread_choice_.reset();
+  pool_.setSolo(thread_choice_.solo());
   stretch_compliance_ = cloth.stretch_compliance;
   bend_compliance_ = cloth.bend_compliance;
   prepared_h_ = kNotPrepared;  // compliances, method or stiffness may have changed
@@ -900,6 +903,11 @@ void Solver::step(double dt, Particles& p, const ClothTopology& topology, Collis
   stats_.degenerate_constraints = degenerate_in_pass_;
   stats_.first_degenerate_constraint = first_degenerate_in_pass_;
   stats_.step_wall_time = seconds(t_start, Clock::now());
+  stats_.threads_used = pool_.solo() ? 1 : pool_.threads();
+  // The next step's threads, from this step's time (thread_choice.h): the same results either way.
+  if (config_.adaptive_threads && pool_.threads() > 1) {
+    pool_.setSolo(thread_choice_.next(stats_.step_wall_time));
+  }
 }
 
 }  // namespace pbd_cloth

@@ -17,8 +17,9 @@ ClothDiagnostics::ClothDiagnostics(const ros::NodeHandle& nh, const ros::NodeHan
   updater_.add("inputs", this, &ClothDiagnostics::inputStatus);
 }
 
-void ClothDiagnostics::addStep(double step_wall_time, int truncated_searches) {
+void ClothDiagnostics::addStep(double step_wall_time, int truncated_searches, bool on_one_thread) {
   ++step_count_;
+  if (on_one_thread) ++one_thread_steps_;
   step_time_sum_ += step_wall_time;
   step_time_max_ = std::max(step_time_max_, step_wall_time);
   truncated_searches_ += truncated_searches;
@@ -33,6 +34,7 @@ void ClothDiagnostics::report(const SimulationHealth& health, const InputRejecti
   step_time_sum_ = 0.0;
   step_time_max_ = 0.0;
   truncated_searches_ = 0;
+  one_thread_steps_ = 0;
 }
 
 void ClothDiagnostics::simulationStatus(diagnostic_updater::DiagnosticStatusWrapper& status) {
@@ -102,6 +104,8 @@ void ClothDiagnostics::simulationStatus(diagnostic_updater::DiagnosticStatusWrap
   status.add("max penetration (m)", health_.max_penetration);
   status.add("degenerate constraints (last step)", health_.degenerate_constraints);
   status.add("truncated self-collision searches (since last report)", truncated_searches_);
+  status.add("steps on the calling thread alone (since last report; solver.adaptive_threads)",
+             one_thread_steps_);
   status.add("restored steps", health_.restored_steps);
   status.add("last fault", health_.last_fault);
   if (health_.has_cameras) {

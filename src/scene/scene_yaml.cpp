@@ -224,7 +224,8 @@ void readSolver(const YAML::Node& node, SolverConfig& s) {
                                        "max_speed",        "simd",
                                        "threads",          "sleep_speed",
                                        "sleep_time",       "search_window",
-                                       "chebyshev",        "avx512"});
+                                       "chebyshev",        "avx512",
+                                       "adaptive_threads"});
   if (map.has("method")) {
     s.method = toWord(map.get("method"), map.keyOf("method"),
                       {Method::kXpbd, Method::kPbd, Method::kVerlet, Method::kMassSpring});
@@ -252,6 +253,7 @@ void readSolver(const YAML::Node& node, SolverConfig& s) {
   map.read("simd", s.simd);
   map.read("avx512", s.avx512);
   map.read("threads", s.threads);
+  map.read("adaptive_threads", s.adaptive_threads);
   map.read("sleep_speed", s.sleep_speed);
   map.read("sleep_time", s.sleep_time);
   map.read("search_window", s.search_window);

@@ -33,6 +33,7 @@ const char kUsage[] =
     "(substeps per contact search, mean over the steps) truncated_searches (self-collision\n"
     "searches of the run that stopped at their candidate budget: a cloth crushed into itself)\n"
     "local_searches (per step: searches for a few particles that left their bounds, alone)\n"
+    "solo_steps (steps that solver.adaptive_threads ran on the calling thread alone)\n"
     "method substeps\n"
     "iterations ...).\n"
     "Only the step calls are timed (cpu_ms_per_step: their processor time, which leaves out\n"
@@ -186,6 +187,8 @@ struct BenchResult {
   // Self-collision searches over the run that stopped at their candidate budget (a cloth crushed
   // into itself; SelfCollision::kPairsPerElement): 0 in every shipped scene.
   long long truncated_searches = 0;
+  // Steps solver.adaptive_threads ran on the calling thread alone (thread_choice.h).
+  long long solo_steps = 0;
   int particles = 0;
   int sample_every = 1;
   double depth_ms = -1.0;  // --depth: mean time to render one image; < 0: not asked
@@ -285,6 +288,7 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
   long long vertex_triangle_pairs = 0, edge_edge_pairs = 0;
   long long search_window = 0;
   long long truncated_searches = 0;
+  long long solo_steps = 0;
   long long iterations = 0;
   long long done = 0;
   double asleep_seconds = 0.0, awake_seconds = 0.0;
@@ -304,6 +308,7 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
       ++asleep_steps;
     } else {
       awake_seconds += seconds;
+      if (sim.solver().stats().threads_used == 1 && scene.solver.threads > 1) ++solo_steps;
     }
     ++done;
     // The solver's figures (sim.stats() would also measure the state, as a report does).
@@ -365,6 +370,7 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
   result.edge_edge_pairs = static_cast<double>(edge_edge_pairs) * per_step;
   result.search_window = static_cast<double>(search_window) * per_step;
   result.truncated_searches = truncated_searches;
+  result.solo_steps = solo_steps;
   return result;
 }
 
@@ -379,7 +385,8 @@ void printResult(const pbd_cloth::SceneConfig& scene, const BenchResult& r) {
       "final_structural_max_strain=%.9g final_structural_mean_strain=%.9g cpu_ms_per_step=%.6g "
       "asleep_steps=%lld asleep_ms_per_step=%.6g awake_ms_per_step=%.6g "
       "vertex_triangle_pairs=%.6g edge_edge_pairs=%.6g search_window=%.6g "
-      "truncated_searches=%lld local_searches=%.6g last_second_median_structural_max_strain=%.9g",
+      "truncated_searches=%lld local_searches=%.6g last_second_median_structural_max_strain=%.9g "
+      "solo_steps=%lld threads=%d",
       r.wall_ms_per_step, r.max_strain, last.mean_strain, r.max_penetration,
       last.self_intersections, last.energy, last.finite ? 1 : 0, r.steps, r.sim_time,
       r.iterations_per_step, r.predict_ms, r.collide_ms, r.project_ms, r.update_ms,
@@ -389,7 +396,7 @@ void printResult(const pbd_cloth::SceneConfig& scene, const BenchResult& r) {
       last.structural_max_strain, last.structural_mean_strain, r.cpu_ms_per_step, r.asleep_steps,
       r.asleep_ms_per_step, r.awake_ms_per_step, r.vertex_triangle_pairs, r.edge_edge_pairs,
       r.search_window, r.truncated_searches, r.local_searches,
-      r.last_second_median_structural_max_strain);
+      r.last_second_median_structural_max_strain, r.solo_steps, scene.solver.threads);
   if (r.depth_ms >= 0.0) std::printf(" depth_ms=%.6g", r.depth_ms);
   std::printf("\n");
 }

@@ -65,9 +65,11 @@ class ClothDiagnostics {
   ClothDiagnostics(const ros::NodeHandle& nh, const ros::NodeHandle& nh_private,
                    const std::string& node_name, const Config& config);
 
-  // Every step: its wall time (s) and its self-collision searches that stopped at their candidate
-  // budget (a cloth crushed into itself; SelfCollision::kPairsPerElement).
-  void addStep(double step_wall_time, int truncated_searches);
+  // Every step: its wall time (s), its self-collision searches that stopped at their candidate
+  // budget (a cloth crushed into itself; SelfCollision::kPairsPerElement), and whether it ran on
+  // the calling thread alone although solver.threads > 1 (solver.adaptive_threads found that
+  // faster: another process holds a core; thread_choice.h).
+  void addStep(double step_wall_time, int truncated_searches, bool on_one_thread = false);
   // Publishes both statuses now; the step figures gathered since the previous report are reset
   // (a crush shorter than the report period still shows).
   void report(const SimulationHealth& health, const InputRejections& rejections);
@@ -89,6 +91,7 @@ class ClothDiagnostics {
   double step_time_sum_ = 0.0;
   double step_time_max_ = 0.0;
   int truncated_searches_ = 0;
+  int one_thread_steps_ = 0;
   std::uint32_t rejected_at_last_report_ = 0;
 };
 
