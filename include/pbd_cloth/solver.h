@@ -40,6 +40,9 @@ struct StepStats {
   // Threads that ran the last step: solver.threads, or 1 where solver.adaptive_threads chose the
   // calling thread alone (thread_choice.h); 0 for a step slept through (no solve).
   int threads_used = 1;
+  // The last step ran on the calling thread alone although solver.threads > 1 (what the node's
+  // diagnostics and cloth_bench's solo_steps count).
+  bool on_one_thread = false;
 };
 
 class Solver {

@@ -516,6 +516,7 @@ void Simulation::step(double dt) {
       stats.project_time = stats.update_time = stats.contact_time = 0.0;
       stats.iterations = 0;
       stats.threads_used = 0;  // no solve
+      stats.on_one_thread = false;
       last_step_restored_ = false;
       return;
     }

@@ -904,6 +904,7 @@ void Solver::step(double dt, Particles& p, const ClothTopology& topology, Collis
   stats_.first_degenerate_constraint = first_degenerate_in_pass_;
   stats_.step_wall_time = seconds(t_start, Clock::now());
   stats_.threads_used = pool_.solo() ? 1 : pool_.threads();
+  stats_.on_one_thread = pool_.solo() && pool_.threads() > 1;
   // The next step's threads, from this step's time (thread_choice.h): the same results either way.
   if (config_.adaptive_threads && pool_.threads() > 1) {
     pool_.setSolo(thread_choice_.next(stats_.step_wall_time));

@@ -501,7 +501,7 @@ void ClothRos::stepOnce() {
   // The solver's own figures: Simulation::stats() would measure the state at every step.
   const StepStats& step_stats = sim_->solver().stats();
   diagnostics_->addStep(step_stats.step_wall_time, sim_->collisions().stats().truncated_searches,
-                        step_stats.threads_used == 1 && sim_->scene().solver.threads > 1);
+                        step_stats.on_one_thread);
   warnAboutDegenerateConstraints();
   warnAboutTruncatedSearches();
 

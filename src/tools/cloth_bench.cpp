@@ -308,7 +308,7 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
       ++asleep_steps;
     } else {
       awake_seconds += seconds;
-      if (sim.solver().stats().threads_used == 1 && scene.solver.threads > 1) ++solo_steps;
+      if (sim.solver().stats().on_one_thread) ++solo_steps;
     }
     ++done;
     // The solver's figures (sim.stats() would also measure the state, as a report does).

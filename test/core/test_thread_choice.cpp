@@ -169,6 +169,8 @@ TEST(ThreadChoice, EveryStepsThreadsGiveTheSameCloth) {
   for (int step = 0; step < 40; ++step) {
     single.step();
     adaptive.step();
+    EXPECT_EQ(adaptive.solver().stats().on_one_thread,
+              adaptive.solver().stats().threads_used == 1);
     if (adaptive.solver().stats().threads_used == 1) {
       ++solo_steps;
     } else {
@@ -188,6 +190,7 @@ TEST(ThreadChoice, EveryStepsThreadsGiveTheSameCloth) {
   for (int step = 0; step < 20; ++step) {
     fixed.step();
     EXPECT_EQ(fixed.solver().stats().threads_used, 2);
+    EXPECT_FALSE(fixed.solver().stats().on_one_thread);
   }
 }
 
