@@ -169,8 +169,7 @@ TEST(ThreadChoice, EveryStepsThreadsGiveTheSameCloth) {
   for (int step = 0; step < 40; ++step) {
     single.step();
     adaptive.step();
-    EXPECT_EQ(adaptive.solver().stats().on_one_thread,
-              adaptive.solver().stats().threads_used == 1);
+    EXPECT_EQ(adaptive.solver().stats().on_one_thread, adaptive.solver().stats().threads_used == 1);
     if (adaptive.solver().stats().threads_used == 1) {
       ++solo_steps;
     } else {
