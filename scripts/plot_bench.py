@@ -526,6 +526,61 @@ def machine_yardstick(swinging, swinging100, cheapest_both):
                 factor, ', '.join(scaled), ', '.join(verdicts)))
 
 
+# Issue 12's targets 1-3 by the setting scripts/issue_yardstick times for each: (number, the
+# setting's name in issue_yardstick.csv, goal ms, fallback ms or None, strains checked).
+YARDSTICK_TARGETS = (
+    (1, 'today: target 1, levels 60x1, both diagonals', 1.6, 5.0, True),
+    (1, 'today: target 1, levels 60x1, one diagonal', 1.6, 5.0, True),
+    (2, 'today: target 2, 100x100 levels 128x1, both diagonals', 6.5, 20.0, True),
+    (3, 'today: target 3, fabric_table', 1.5, None, False),
+    (3, 'today: target 3, fabric_table + self-collision', 3.0, None, False),
+)
+
+
+def issue_yardstick_row(data_dir):
+    """Targets 1-3 on the issue's machine, scaled by the issue's own program (pbd_cloth at the
+    commit the issue was filed on) timed in the same rounds (scripts/issue_yardstick), or None."""
+    path = os.path.join(data_dir, 'issue_yardstick.csv')
+    if not os.path.exists(path):
+        return None
+    with open(path, newline='') as handle:
+        rows = {r['setting']: r for r in csv.DictReader(handle)}
+    day = [rows.get('issue day: xpbd %dx1, one diagonal' % n) for n in (80, 20)]
+    if not all(day):
+        return None
+    factor = number(day[0]['x_faster_than_issue'])  # the issue's 80 x 1: its larger figure
+    scaled, verdicts = [], []
+    for number_, name, goal, fallback, strains in YARDSTICK_TARGETS:
+        run = rows.get(name)
+        if not run:
+            continue
+        ms = number(run['median_wall_ms_per_step']) * factor
+        label = name.split(': ', 1)[1]
+        reached = (not strains or
+                   (number(run['final_structural_max_strain']) <= SWING_MAX_TARGET and
+                    number(run['final_structural_mean_strain']) <= SWING_MEAN_TARGET))
+        scaled.append('%s: %s (%s here)' % (label, fmt_ms(ms),
+                                            fmt_ms(number(run['median_wall_ms_per_step']))))
+        if not reached:
+            verdicts.append('%s: strain not reached' % label)
+        elif fallback is None:
+            verdicts.append('%s: %s' % (label, 'yes' if ms <= goal else 'no'))
+        else:
+            verdicts.append('%s: %s' % (label, target_met(ms, goal, fallback)))
+    bullet = ['%s %s (issue %s ms: x%.2f)' % (r['setting'], fmt_ms(number(r['median_wall_ms_per_step'])),
+                                             r['issue_ms'], number(r['x_faster_than_issue']))
+              for r in rows.values() if r['program'] == 'bullet']
+    return ('| 1-3 | on the issue\'s machine by the issue\'s own program: pbd_cloth %s (the commit '
+            'the issue was filed on), plain xpbd on the swinging cloth, 80 x 1 and 20 x 1: 6.2 '
+            'and 1.6 ms there | %s and %s here (x%.2f and x%.2f, medians of the same rounds as '
+            'the settings: doc/issue_yardstick.csv); scaled by x%.2f: %s. Bullet in the same '
+            'rounds: %s | %s |' % (
+                day[0]['program'].split()[-1], fmt_ms(number(day[0]['median_wall_ms_per_step'])),
+                fmt_ms(number(day[1]['median_wall_ms_per_step'])), factor,
+                number(day[1]['x_faster_than_issue']), factor, '; '.join(scaled),
+                '; '.join(bullet), '; '.join(verdicts)))
+
+
 def issue12_summary(add, data_dir, swinging, swinging100, fabric, towel, micro):
     """Issue 12's targets, each with what this run measured (all from the CSVs of doc/)."""
     add('')
@@ -570,6 +625,9 @@ def issue12_summary(add, data_dir, swinging, swinging100, fabric, towel, micro):
     yardstick = machine_yardstick(swinging, swinging100, cheapest_both)
     if yardstick:
         add(yardstick)
+    own = issue_yardstick_row(data_dir)
+    if own:
+        add(own)
     if fabric:
         # The target names no thread count (targets 1 and 2 say one thread): both are shown.
         for curve, goal in (('xpbd', 1.5), ('xpbd, 2 threads', 1.5),
