@@ -44,6 +44,9 @@ class CoarseLevels {
   // solver.tolerance reads it). simd, avx512: solver.simd, solver.avx512.
   double project(Particles& p, bool interpolate, bool simd = true, bool track_change = true,
                  bool avx512 = true);
+  // The same sweep without interpolation, on the cloth's positions in columns (a step of links
+  // alone, Solver::linksAlone): the same operations, so the same result to the bit.
+  double project(PositionColumns cloth, bool simd, bool track_change, bool avx512);
 
  private:
   struct Link {
@@ -74,6 +77,8 @@ class CoarseLevels {
     std::vector<double> compact_inverse_mass;
     std::vector<Interpolated> finer_only;  // the finer level's particles not on this level
   };
+  // One level's links on its packed positions (level.compact_position, filled by the caller).
+  static double projectPacked(Level& level, bool simd, bool track_change, bool avx512);
   std::vector<Level> levels_;  // levels_[0] = level 1 (the finest coarse level)
   Vec3Array start_;            // cloth positions at the start of the cycle
   Vec3Array displacement_;     // of a level's particles since the start of the cycle

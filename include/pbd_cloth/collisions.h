@@ -127,6 +127,13 @@ class Collisions {
   void setSubstepFraction(double s_begin, double s_end);
   // One pass over every contact constraint; returns the largest position change.
   double project(Particles& particles, const ClothTopology& topology);
+  // Whether project() reads or moves no particle: no obstacle, no bounds, no particle-particle
+  // contacts and no self-collision (a cloth swinging free). The solver may then keep the positions
+  // out of `particles` during the passes (Solver::linksAlone).
+  bool touchesNoParticle(const Particles& particles, const ClothTopology& topology) const {
+    return shapes_.empty() && !bounds_.enabled && !particleContactsActive(particles) &&
+           !selfCollisionActive(topology);
+  }
   // Ends the step: obstacles arrive at their targets.
   void endStep();
   // Between steps: contact lists that an extreme step grew beyond their reserve go back to it

@@ -43,6 +43,10 @@ struct StepStats {
   // The last step ran on the calling thread alone although solver.threads > 1 (what the node's
   // diagnostics and cloth_bench's solo_steps count).
   bool on_one_thread = false;
+  // The last step was one of links alone (Solver::linksAlone: nothing but the flat links and the
+  // coarse levels in a pass) and kept the particles in columns from its first prediction to its
+  // last velocity update; the same result to the bit as the passes in place.
+  bool links_in_columns = false;
 };
 
 class Solver {
@@ -114,6 +118,16 @@ class Solver {
   StretchLinks stretch_links_;          // topology.stretch in flat arrays and batches (prepare)
   std::vector<double> link_lambda_;     // their multipliers in stretch_links_' order
   ColumnPositions link_positions_;      // the particles' positions in columns during the sweep
+  // A step of links alone (linksAlone): the particles' velocities and substep starts in columns
+  // beside link_positions_, which then hold the positions from the step's first prediction to its
+  // last velocity update instead of being filled and emptied around every sweep.
+  ColumnPositions column_velocity_;
+  ColumnPositions column_start_;
+  bool in_columns_ = false;  // this step runs in the columns
+  bool linksAlone(const Particles& p, const ClothTopology& topology,
+                  const Collisions& collisions) const;
+  void stateToColumns(const Particles& p);
+  void stateFromColumns(Particles& p);
   // solver.threads: the workers, and each thread's tasks of each phase of the links (a range of
   // stretch_links_' tasks, balanced by link count): thread t of phase p runs tasks
   // [thread_tasks_[p * (T + 1) + t], thread_tasks_[p * (T + 1) + t + 1]).

@@ -159,6 +159,39 @@ void CoarseLevels::prepareStep(const Particles& p) {
   }
 }
 
+double CoarseLevels::projectPacked(Level& level, bool simd, bool track_change, bool avx512) {
+  StretchProjection how;
+  how.unilateral = true;
+  how.simd = simd;
+  how.avx512 = avx512;
+  how.track_change = track_change;
+  return projectStretchLinks(level.flat, 0, level.flat.batchCount(), how,
+                             level.compact_position.columns(), nullptr)
+      .max_change;
+}
+
+double CoarseLevels::project(PositionColumns cloth, bool simd, bool track_change, bool avx512) {
+  double max_change = 0.0;
+  for (int k = static_cast<int>(levels_.size()) - 1; k >= 0; --k) {
+    Level& level = levels_[k];
+    const int count = static_cast<int>(level.particles.size());
+    const PositionColumns packed = level.compact_position.columns();
+    const int* particles = level.particles.data();
+    for (int q = 0; q < count; ++q) {
+      packed.x[q] = cloth.x[particles[q]];
+      packed.y[q] = cloth.y[particles[q]];
+      packed.z[q] = cloth.z[particles[q]];
+    }
+    max_change = std::max(max_change, projectPacked(level, simd, track_change, avx512));
+    for (int q = 0; q < count; ++q) {
+      cloth.x[particles[q]] = packed.x[q];
+      cloth.y[particles[q]] = packed.y[q];
+      cloth.z[particles[q]] = packed.z[q];
+    }
+  }
+  return max_change;
+}
+
 double CoarseLevels::project(Particles& p, bool interpolate, bool simd, bool track_change,
                              bool avx512) {
   if (levels_.empty()) return 0.0;
@@ -182,14 +215,7 @@ double CoarseLevels::project(Particles& p, bool interpolate, bool simd, bool tra
         packed.y[q] = x[1];
         packed.z[q] = x[2];
       }
-      StretchProjection how;
-      how.unilateral = true;
-      how.simd = simd;
-      how.avx512 = avx512;
-      how.track_change = track_change;
-      max_change = std::max(max_change, projectStretchLinks(level.flat, 0, level.flat.batchCount(),
-                                                            how, packed, nullptr)
-                                            .max_change);
+      max_change = std::max(max_change, projectPacked(level, simd, track_change, avx512));
       for (int q = 0; q < count; ++q) {
         p.position[level.particles[q]] = Vec3(packed.x[q], packed.y[q], packed.z[q]);
       }

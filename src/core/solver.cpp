@@ -99,6 +99,8 @@ void Solver::prepare(const Particles& particles, const ClothTopology& topology) 
   stretch_links_.assign(topology.stretch, n, grid ? topology.rows : 0, grid ? topology.cols : 0);
   link_lambda_.assign(topology.stretch.size(), 0.0);
   link_positions_.resize(stretch_links_.size() > 0 ? n : 0);
+  column_velocity_.resize(link_positions_.size());
+  column_start_.resize(link_positions_.size());
   splitTasks();
   bend_lambda_.assign(topology.bend.size(), Vec3::Zero());
   flat_hinges_.assign(topology.bend_rest.empty() ? topology.bend.size() : 0, FlatHinge());
@@ -212,11 +214,10 @@ struct PredictArgs {
 // updateVelocities). The update needs no stored x~: while a substep runs nothing writes v or the
 // substep's start, so start + h v is the prediction again, to the bit (the same operands and
 // operation as x += h v).
-PBD_INLINE void predictCoordinate(int k, int q, const double* dv, const PredictArgs& a,
-                                  double* __restrict x, double* __restrict v,
-                                  double* __restrict start) {
+PBD_INLINE void predictCoordinate(int k, double dv, const PredictArgs& a, double* __restrict x,
+                                  double* __restrict v, double* __restrict start) {
   start[k] = x[k];
-  v[k] = a.keep * v[k] + dv[q];
+  v[k] = a.keep * v[k] + dv;
   x[k] += a.h * v[k];
 }
 
@@ -238,7 +239,7 @@ PBD_INLINE void advanceFree(const PredictArgs& a) {
                          a.dv_x, a.dv_y, a.dv_z, a.dv_x, a.dv_y, a.dv_z};
   auto advance = [&](int k, int q) {
     if (update) updateCoordinate(k, a, x, v, start);
-    if (predict) predictCoordinate(k, q, dv, a, x, v, start);
+    if (predict) predictCoordinate(k, dv[q], a, x, v, start);
   };
   int i = a.begin;
   for (; i + 4 <= a.end; i += 4) {
@@ -246,6 +247,24 @@ PBD_INLINE void advanceFree(const PredictArgs& a) {
   }
   for (; i < a.end; ++i) {
     for (int d = 0; d < 3; ++d) advance(3 * i + d, d);
+  }
+}
+
+// The same on the particles' columns (a step of links alone, Solver::advanceColumns): x, v and
+// start each hold the x column, then the y and the z column, `stride` apart; the same operations
+// on each coordinate, so the same result to the bit.
+template <bool update, bool predict>
+PBD_INLINE void advanceFreeColumns(const PredictArgs& a, int stride) {
+  double* __restrict x = a.x;
+  double* __restrict v = a.v;
+  double* __restrict start = a.start;
+  const double dv[3] = {a.dv_x, a.dv_y, a.dv_z};
+  for (int d = 0; d < 3; ++d) {
+    const int end = d * stride + a.end;
+    for (int k = d * stride + a.begin; k < end; ++k) {
+      if (update) updateCoordinate(k, a, x, v, start);
+      if (predict) predictCoordinate(k, dv[d], a, x, v, start);
+    }
   }
 }
 
@@ -259,6 +278,11 @@ template <bool update, bool predict>
 __attribute__((target("avx2"))) void advanceFreeAvx2(const PredictArgs& a) {
   advanceFree<update, predict>(a);
 }
+
+template <bool update, bool predict>
+__attribute__((target("avx2"))) void advanceFreeColumnsAvx2(const PredictArgs& a, int stride) {
+  advanceFreeColumns<update, predict>(a, stride);
+}
 #endif
 
 template <bool update, bool predict>
@@ -269,6 +293,32 @@ void advanceFree(const PredictArgs& a, bool avx2) {
   (void)avx2;
 #endif
   advanceFree<update, predict>(a);
+}
+
+template <bool update, bool predict>
+void advanceFreeColumns(const PredictArgs& a, int stride, bool avx2) {
+#if defined(__x86_64__) && defined(__GNUC__)
+  if (avx2) return advanceFreeColumnsAvx2<update, predict>(a, stride);
+#else
+  (void)avx2;
+#endif
+  advanceFreeColumns<update, predict>(a, stride);
+}
+
+// Calls advanceFree<update, predict> (interleaved) or advanceFreeColumns with the flags as values.
+void advanceFreeRange(const PredictArgs& a, bool update, bool predict, int column_stride,
+                      bool avx2) {
+  const bool columns = column_stride > 0;
+  if (update && predict) {
+    columns ? advanceFreeColumns<true, true>(a, column_stride, avx2)
+            : advanceFree<true, true>(a, avx2);
+  } else if (update) {
+    columns ? advanceFreeColumns<true, false>(a, column_stride, avx2)
+            : advanceFree<true, false>(a, avx2);
+  } else {
+    columns ? advanceFreeColumns<false, true>(a, column_stride, avx2)
+            : advanceFree<false, true>(a, avx2);
+  }
 }
 
 }  // namespace
@@ -298,9 +348,14 @@ void Solver::advance(double h, double s_end, bool update, bool predict, Particle
   args.dv_x = dv[0];
   args.dv_y = dv[1];
   args.dv_z = dv[2];
-  args.x = p.position.front().data();
-  args.v = p.velocity.front().data();
-  args.start = p.substep_start.front().data();
+  // Interleaved (x0 y0 z0 x1 ...) in `p`, or in columns during a step of links alone: coordinate
+  // d of particle i is at i * particle_step + d * coordinate_step either way.
+  const bool columns = in_columns_;
+  args.x = columns ? link_positions_.columns().x : p.position.front().data();
+  args.v = columns ? column_velocity_.columns().x : p.velocity.front().data();
+  args.start = columns ? column_start_.columns().x : p.substep_start.front().data();
+  const int particle_step = columns ? 1 : 3;
+  const int coordinate_step = columns ? link_positions_.size() : 1;
   const bool avx2 = config_.simd && stretchLinksUseAvx2();
   // Threads take equal ranges of particles (each particle on its own).
   pool_.runRanges(n, [&](int begin, int end, int) {
@@ -308,25 +363,54 @@ void Solver::advance(double h, double s_end, bool update, bool predict, Particle
     // h; a prediction keeps it (the free particles' arithmetic runs on it too, and is undone).
     for (int i : kinematic_particles_) {
       if (i < begin || i >= end) continue;
-      kinematic_velocity_[i] =
-          update ? Vec3((p.position[i] - p.substep_start[i]) * args.inv_h) : p.velocity[i];
+      for (int d = 0; d < 3; ++d) {
+        const int k = i * particle_step + d * coordinate_step;
+        kinematic_velocity_[i][d] = update ? (args.x[k] - args.start[k]) * args.inv_h : args.v[k];
+      }
     }
     PredictArgs range = args;
     range.begin = begin;
     range.end = end;
-    if (update && predict) {
-      advanceFree<true, true>(range, avx2);
-    } else if (update) {
-      advanceFree<true, false>(range, avx2);
-    } else {
-      advanceFree<false, true>(range, avx2);
-    }
+    advanceFreeRange(range, update, predict, columns ? coordinate_step : 0, avx2);
     for (int i : kinematic_particles_) {
       if (i < begin || i >= end) continue;
-      p.velocity[i] = kinematic_velocity_[i];
-      if (predict) p.position[i] = (1.0 - s_end) * p.kinematic_from[i] + s_end * p.kinematic_to[i];
+      for (int d = 0; d < 3; ++d) {
+        const int k = i * particle_step + d * coordinate_step;
+        args.v[k] = kinematic_velocity_[i][d];
+        if (predict) {
+          args.x[k] = (1.0 - s_end) * p.kinematic_from[i][d] + s_end * p.kinematic_to[i][d];
+        }
+      }
     }
   });
+}
+
+// A step of links alone: nothing in a pass but the coarse levels and the flat links (no hinges,
+// tethers or Chebyshev, and collisions that touch no particle: a cloth swinging free), Gauss-
+// Seidel. Its positions, velocities and substep starts then stay in columns for the whole step
+// (stateToColumns before the first prediction, stateFromColumns after the last update), where
+// otherwise every pass copies the positions into the columns and back around the sweep: 13.5 % of
+// the 100 x 100 swinging cloth's step (doc/performance.md, "A step of links alone, in columns").
+bool Solver::linksAlone(const Particles& p, const ClothTopology& topology,
+                        const Collisions& collisions) const {
+  return config_.method != Method::kMassSpring && config_.ordering != Ordering::kJacobi &&
+         fastStretch(topology) && link_positions_.size() == p.size() && bend_compliance_ < 0.0 &&
+         topology.tethers.empty() && config_.chebyshev == 0.0 &&
+         (coarse_.levelCount() == 0 || !config_.levels_interpolate) &&
+         collisions.touchesNoParticle(p, topology);
+}
+
+void Solver::stateToColumns(const Particles& p) {
+  const int n = p.size();
+  positionsToColumns(p.position.front().data(), 0, n, link_positions_.columns(), config_.simd);
+  positionsToColumns(p.velocity.front().data(), 0, n, column_velocity_.columns(), config_.simd);
+}
+
+void Solver::stateFromColumns(Particles& p) {
+  const int n = p.size();
+  positionsFromColumns(link_positions_.columns(), 0, n, p.position.front().data(), config_.simd);
+  positionsFromColumns(column_velocity_.columns(), 0, n, p.velocity.front().data(), config_.simd);
+  positionsFromColumns(column_start_.columns(), 0, n, p.substep_start.front().data(), config_.simd);
 }
 
 // Jacobi with averaging scales constraint c's multiplier step by w / max_k n_k over its free
@@ -370,9 +454,10 @@ double Solver::projectStretch(double h, Particles& p, const ClothTopology& topol
     // and back out around it, which costs a small part of what the columns save the sweep. The
     // copies run on this thread: with solver.threads 2 one more meeting of the threads for each
     // cost more than the half copy it saved (doc/performance.md, "Positions in columns").
+    // In a step of links alone they are there already (linksAlone).
     double* x = p.position.front().data();
     const PositionColumns columns = link_positions_.columns();
-    positionsToColumns(x, 0, p.size(), columns, config_.simd);
+    if (!in_columns_) positionsToColumns(x, 0, p.size(), columns, config_.simd);
     StretchPassResult result;
     const int threads = pool_.threads();
     for (int phase = 0; phase < stretch_links_.phaseCount(); ++phase) {
@@ -385,7 +470,7 @@ double Solver::projectStretch(double h, Particles& p, const ClothTopology& topol
       pool_.run(job);
       for (int t = 0; t < threads; ++t) result.merge(thread_results_[t]);
     }
-    positionsFromColumns(columns, 0, p.size(), x, config_.simd);
+    if (!in_columns_) positionsFromColumns(columns, 0, p.size(), x, config_.simd);
     if (result.degenerate > 0) {
       if (degenerate_in_pass_ == 0) {
         first_degenerate_in_pass_ = stretch_links_.original[result.first_degenerate];
@@ -623,8 +708,10 @@ double Solver::projectPass(double h, Particles& p, const ClothTopology& topology
   // compliant (they are inextensible); the explicit springs do not come here.
   double max_change = 0.0;
   if (coarse_.levelCount() > 0 && stretch_compliance_ == 0.0) {
-    max_change = coarse_.project(p, config_.levels_interpolate, config_.simd, tracksLargestChange(),
-                                 config_.avx512);
+    max_change = in_columns_ ? coarse_.project(link_positions_.columns(), config_.simd,
+                                               tracksLargestChange(), config_.avx512)
+                             : coarse_.project(p, config_.levels_interpolate, config_.simd,
+                                               tracksLargestChange(), config_.avx512);
   }
   max_change = std::max(max_change, projectStretch(h, p, topology, first_pass));
   max_change = std::max(max_change, projectBend(h, p, topology, first_pass, last_pass));
@@ -766,9 +853,13 @@ void Solver::startReactions(const Particles& p, const ClothTopology& topology, b
 // its gradient at the kinematic particle (stretch: +-n; hinge: scale K_k) is the reaction there.
 // Read after the passes instead of inside the projection loops, which stay as they are.
 void Solver::addMultiplierReactions(const Particles& p, const ClothTopology& topology) {
+  const PositionColumns columns = link_positions_.columns();
+  auto position = [&](int i) {
+    return in_columns_ ? Vec3(columns.x[i], columns.y[i], columns.z[i]) : p.position[i];
+  };
   for (int c : kinematic_stretch_) {
     const DistanceConstraint& con = topology.stretch[c];
-    const Vec3 delta = p.position[con.i] - p.position[con.j];
+    const Vec3 delta = position(con.i) - position(con.j);
     const double length = delta.norm();
     if (length < kMinLength) continue;
     const Vec3 reaction = (stretchLambda(c, topology) / length) * delta;  // lambda grad_i C
@@ -843,6 +934,9 @@ void Solver::step(double dt, Particles& p, const ClothTopology& topology, Collis
   collisions.beginStep(p, topology, dt);
   auto t1 = Clock::now();
   stats_.collide_time += seconds(t0, t1);
+  in_columns_ = substeps > 0 && linksAlone(p, topology, collisions);
+  stats_.links_in_columns = in_columns_;
+  if (in_columns_) stateToColumns(p);
 
   for (int s = 0; s < substeps; ++s) {
     const double s_begin = static_cast<double>(s) / substeps;
@@ -894,6 +988,10 @@ void Solver::step(double dt, Particles& p, const ClothTopology& topology, Collis
     const auto t2 = Clock::now();
     updateVelocities(h, p);
     stats_.update_time += seconds(t2, Clock::now());
+  }
+  if (in_columns_) {
+    stateFromColumns(p);
+    in_columns_ = false;
   }
 
   finishReactions(dt, h, p, collisions);
