@@ -34,6 +34,7 @@ const char kUsage[] =
     "searches of the run that stopped at their candidate budget: a cloth crushed into itself)\n"
     "local_searches (per step: searches for a few particles that left their bounds, alone)\n"
     "solo_steps (steps that solver.adaptive_threads ran on the calling thread alone)\n"
+    "columns_steps (steps of links alone, run with the particles in columns: Solver::linksAlone)\n"
     "method substeps\n"
     "iterations ...).\n"
     "Only the step calls are timed (cpu_ms_per_step: their processor time, which leaves out\n"
@@ -189,6 +190,8 @@ struct BenchResult {
   long long truncated_searches = 0;
   // Steps solver.adaptive_threads ran on the calling thread alone (thread_choice.h).
   long long solo_steps = 0;
+  // Steps of links alone, run with the particles in columns (StepStats::links_in_columns).
+  long long columns_steps = 0;
   int particles = 0;
   int sample_every = 1;
   double depth_ms = -1.0;  // --depth: mean time to render one image; < 0: not asked
@@ -289,6 +292,7 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
   long long search_window = 0;
   long long truncated_searches = 0;
   long long solo_steps = 0;
+  long long columns_steps = 0;
   long long iterations = 0;
   long long done = 0;
   double asleep_seconds = 0.0, awake_seconds = 0.0;
@@ -309,6 +313,7 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
     } else {
       awake_seconds += seconds;
       if (sim.solver().stats().on_one_thread) ++solo_steps;
+      if (sim.solver().stats().links_in_columns) ++columns_steps;
     }
     ++done;
     // The solver's figures (sim.stats() would also measure the state, as a report does).
@@ -371,6 +376,7 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
   result.search_window = static_cast<double>(search_window) * per_step;
   result.truncated_searches = truncated_searches;
   result.solo_steps = solo_steps;
+  result.columns_steps = columns_steps;
   return result;
 }
 
@@ -386,7 +392,7 @@ void printResult(const pbd_cloth::SceneConfig& scene, const BenchResult& r) {
       "asleep_steps=%lld asleep_ms_per_step=%.6g awake_ms_per_step=%.6g "
       "vertex_triangle_pairs=%.6g edge_edge_pairs=%.6g search_window=%.6g "
       "truncated_searches=%lld local_searches=%.6g last_second_median_structural_max_strain=%.9g "
-      "solo_steps=%lld threads=%d",
+      "solo_steps=%lld threads=%d columns_steps=%lld",
       r.wall_ms_per_step, r.max_strain, last.mean_strain, r.max_penetration,
       last.self_intersections, last.energy, last.finite ? 1 : 0, r.steps, r.sim_time,
       r.iterations_per_step, r.predict_ms, r.collide_ms, r.project_ms, r.update_ms,
@@ -396,7 +402,8 @@ void printResult(const pbd_cloth::SceneConfig& scene, const BenchResult& r) {
       last.structural_max_strain, last.structural_mean_strain, r.cpu_ms_per_step, r.asleep_steps,
       r.asleep_ms_per_step, r.awake_ms_per_step, r.vertex_triangle_pairs, r.edge_edge_pairs,
       r.search_window, r.truncated_searches, r.local_searches,
-      r.last_second_median_structural_max_strain, r.solo_steps, scene.solver.threads);
+      r.last_second_median_structural_max_strain, r.solo_steps, scene.solver.threads,
+      r.columns_steps);
   if (r.depth_ms >= 0.0) std::printf(" depth_ms=%.6g", r.depth_ms);
   std::printf("\n");
 }

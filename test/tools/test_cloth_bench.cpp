@@ -83,6 +83,18 @@ TEST(ClothBench, PrintsEveryMetricOfTheInterface) {
   EXPECT_EQ(values.at("particles"), "100");
 }
 
+// columns_steps counts the steps of links alone (Solver::linksAlone): every step of the small
+// cloth without bending and tethers, none with its bending on.
+TEST(ClothBench, CountsTheStepsOfLinksAlone) {
+  const auto alone =
+      keyValues(runBench("--duration 0.5 --set cloth.bend_compliance=-1" + kSmallUntethered).out);
+  ASSERT_EQ(alone.count("columns_steps"), 1u);
+  EXPECT_EQ(alone.at("columns_steps"), "30");
+  const auto bending = keyValues(runBench("--duration 0.5" + kSmallUntethered).out);
+  ASSERT_EQ(bending.count("columns_steps"), 1u);
+  EXPECT_EQ(bending.at("columns_steps"), "0");
+}
+
 TEST(ClothBench, WritesPositionsAndMeshOfTheFinalState) {
   const std::string positions = ::testing::TempDir() + "bench_positions.csv";
   const std::string mesh = ::testing::TempDir() + "bench_mesh.obj";
