@@ -250,7 +250,7 @@ PBD_INLINE void advanceFree(const PredictArgs& a) {
   }
 }
 
-// The same on the particles' columns (a step of links alone, Solver::advanceColumns): x, v and
+// The same on the particles' columns (Solver::advance in a step of links alone): x, v and
 // start each hold the x column, then the y and the z column, `stride` apart; the same operations
 // on each coordinate, so the same result to the bit.
 template <bool update, bool predict>
