@@ -179,7 +179,15 @@ SWINGING_VARIANTS = {
     # Long-range links in a hierarchy (solver.levels, coarse_levels.h): 5 levels are all a 50 x 50
     # grid has (lines 25, 13, 7, 4, 2).
     'xpbd + levels': (['solver.levels=5'], {'variant': 'levels'},
-                      substeps_only([10, 20, 30, 40, 50, 60, 80, 120])),
+                      substeps_only([10, 20, 30, 36, 40, 50, 60, 80, 120])),
+    # The top row between the pinned corners is exactly taut: solver.taut_chains (on by default,
+    # taut_chains.h) holds it straight. Off, the sweep has to pull it straight (what the option
+    # bought: 60 substeps instead of 36 for both targets, README "Taut chains held straight").
+    'xpbd + levels, taut chains off': (['solver.levels=5', 'solver.taut_chains=false'],
+                                       {'variant': 'levels_taut_chains_off'},
+                                       substeps_only([36, 40, 50, 60, 80])),
+    'xpbd, taut chains off': (['solver.taut_chains=false'], {'variant': 'taut_chains_off'},
+                              substeps_only([80, 160, 320])),
     # HPBD's interpolation of each level's displacement to the finer particles: gains energy.
     'xpbd + levels, interpolated': (['solver.levels=5', 'solver.levels_interpolate=true'],
                                     {'variant': 'levels_interpolated'},
@@ -202,7 +210,7 @@ SWINGING_VARIANTS = {
     # with the issue's own.
     'xpbd + levels, one diagonal': (['solver.levels=5', 'cloth.shear_diagonals=1'],
                                     {'variant': 'levels_one_diagonal'},
-                                    substeps_only([40, 50, 60, 80])),
+                                    substeps_only([32, 36, 40, 50, 60, 80])),
     'xpbd, one diagonal': (['cloth.shear_diagonals=1'], {'variant': 'one_diagonal'},
                            substeps_only([80, 160, 320])),
     'bullet, one diagonal': (['cloth.shear_diagonals=1'], {'variant': 'bullet_one_diagonal'},
@@ -270,18 +278,25 @@ def swinging100_runs(quick):
         plan = [('xpbd + levels', levels, substeps_only([10])),
                 ('bullet', [], substeps_only([5]))]
     else:
-        # 124 and 128 beside 120: the strain at the last instant swings between neighbouring
-        # substep counts (README, target 2), and the chart shows it.
-        plan = [('xpbd + levels', levels, substeps_only([40, 60, 80, 120, 124, 128, 140, 160])),
+        # Neighbouring counts side by side: the strain at the last instant swings between them
+        # (README, target 2), and the chart shows it.
+        plan = [('xpbd + levels', levels, substeps_only([40, 60, 80, 88, 96, 104, 112, 128, 160])),
+                # solver.taut_chains off (the top row swept straight, not held): the
+                # substeps target 2 needed before the option.
+                ('xpbd + levels, taut chains off', levels + ['solver.taut_chains=false'],
+                 substeps_only([96, 112, 120, 124, 128, 140])),
                 ('xpbd + levels, AVX2 only', levels + ['solver.avx512=false'],
-                 substeps_only([120, 128])),
+                 substeps_only([96, 128])),
                 ('xpbd + levels, 2 threads', levels + ['solver.threads=2'],
-                 substeps_only([60, 80, 120, 140])),
+                 substeps_only([60, 80, 96, 120])),
                 # Passes instead of substeps, accelerated (solver.chebyshev): on the chart as at
                 # 50 x 50, where it lost to the substeps (doc/performance.md).
                 ('xpbd + levels, chebyshev 0.9', levels + ['solver.chebyshev=0.9'],
                  [(40, 3), (60, 2), (30, 4)]),
-                ('xpbd', [], substeps_only([80, 160, 320])),
+                # Plain xpbd: with the top row held straight (solver.taut_chains) it meets target
+                # 2 without the levels, at fewer substeps than they need.
+                ('xpbd', [], substeps_only([80, 96, 104, 112, 120, 160, 320])),
+                ('xpbd, taut chains off', ['solver.taut_chains=false'], substeps_only([160, 320])),
                 ('bullet', [], substeps_only([64, 128, 256]) + [(16, 10)])]
     runs = [pbd_run('swinging100', 'swinging.yaml', 'start', 'xpbd', 1, 1, 0.0, grid,
                     level='start')]

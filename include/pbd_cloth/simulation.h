@@ -13,6 +13,7 @@
 #include "pbd_cloth/scene_config.h"
 #include "pbd_cloth/sim_state.h"
 #include "pbd_cloth/solver.h"
+#include "pbd_cloth/taut_chains.h"
 #include "pbd_cloth/tethers.h"
 
 namespace pbd_cloth {
@@ -85,6 +86,8 @@ class Simulation {
   const std::string& gripperName(int gripper) const;
   // The pose the gripper reaches at the end of the next step. A live pose stops its trajectory.
   // A pose with a poseProblem() is refused (false) and the gripper keeps its course.
+  // solver.taut_chains: the particles held straight in the last step, and the ends holding them.
+  const TautChains& tautChains() const { return taut_chains_; }
   bool setGripperPose(int gripper, const Pose& pose);
   const Pose& gripperPose(int gripper) const;
   bool gripperGrasping(int gripper) const;
@@ -227,6 +230,7 @@ class Simulation {
   void findStartWarnings();
   bool canSleepThrough() const;
   void stepAwake(double dt, bool targets_set);
+  void stepHeld(double dt);
   void updateSleep(double dt);
   void injectFault(double dt);
   // setState's check: empty when the state fits this scene, else what does not.
@@ -239,6 +243,9 @@ class Simulation {
   // Rebuilds topology_.tethers on a grasp or release (cloth.tethers), inside the step when the
   // grasp is scripted: its scratch is sized in build().
   TetherBuilder tether_builder_;
+  // solver.taut_chains: rows and columns held straight while exactly taut, step by step.
+  TautChains taut_chains_;
+  bool chainsInextensible() const;
   // Per cloth particle, the body holding it while it is kinematic: -1 pinned, g gripper g (so
   // that two grippers' neighbouring patches are two groups of anchors for the tethers).
   std::vector<int> anchor_holder_;

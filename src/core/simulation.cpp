@@ -94,6 +94,7 @@ void Simulation::build() {
   solver_.configure(scene_.solver, scene_.cloth);
   solver_.prepare(particles_, topology_);
   collisions_.prepare(particles_, topology_);
+  taut_chains_.build(particles_, topology_);
   solver_.mutableStats() = StepStats();
   solver_.initializeVelocities(particles_, 1.0 / scene_.step_rate);
   grippers_.assign(scene_.grippers.size(), GripperState());
@@ -339,7 +340,16 @@ void Simulation::kinematicSetChanged() {
 
 Eigen::Vector3d Simulation::gripperForce(int gripper) const {
   Eigen::Vector3d force = Eigen::Vector3d::Zero();
-  for (int i : grippers_[gripper].grasped) force += solver_.supportForce()[i];
+  const std::vector<int>& grasped = grippers_[gripper].grasped;
+  for (int i : grasped) force += solver_.supportForce()[i];
+  // A chain held straight between its ends (solver.taut_chains) rests on them: each end carries
+  // the share of a held particle's support force that a beam's supports carry of a point load
+  // (1 - s at end a, s at end b, s its place along the chain).
+  auto holds = [&](int i) { return std::find(grasped.begin(), grasped.end(), i) != grasped.end(); };
+  for (const TautChains::Held& h : taut_chains_.held()) {
+    if (holds(h.end_a)) force += (1.0 - h.along) * solver_.supportForce()[h.particle];
+    if (holds(h.end_b)) force += h.along * solver_.supportForce()[h.particle];
+  }
   return force;
 }
 
@@ -426,6 +436,15 @@ void Simulation::updateKinematicTargets(double dt) {
           state.target.position + state.target.orientation * state.local_offsets[k];
     }
   }
+  // Taut chains between the kinematic particles join them for this step (released in step()).
+  if (scene_.solver.taut_chains && chainsInextensible()) taut_chains_.hold(particles_);
+}
+
+// Links that cannot stretch: only then is a taut chain's straight shape the only one it may take.
+bool Simulation::chainsInextensible() const {
+  const SolverConfig& s = scene_.solver;
+  if (scene_.cloth.stretch_compliance != 0.0 || s.method == Method::kMassSpring) return false;
+  return s.method != Method::kPbd || s.stretch_stiffness == 1.0;
 }
 
 // Sleeping. A scene whose free particles all stayed slower than solver.sleep_speed for
@@ -499,6 +518,11 @@ void Simulation::wake() {
 }
 
 void Simulation::step(double dt) {
+  stepHeld(dt);
+  taut_chains_.release(particles_);  // the chains held for the step are free again
+}
+
+void Simulation::stepHeld(double dt) {
   if (asleep_) {
     followTrajectories(time_ + dt);
     followJointTrajectory(time_ + dt);

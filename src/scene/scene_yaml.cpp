@@ -225,7 +225,7 @@ void readSolver(const YAML::Node& node, SolverConfig& s) {
                                        "threads",          "sleep_speed",
                                        "sleep_time",       "search_window",
                                        "chebyshev",        "avx512",
-                                       "adaptive_threads"});
+                                       "adaptive_threads", "taut_chains"});
   if (map.has("method")) {
     s.method = toWord(map.get("method"), map.keyOf("method"),
                       {Method::kXpbd, Method::kPbd, Method::kVerlet, Method::kMassSpring});
@@ -254,6 +254,7 @@ void readSolver(const YAML::Node& node, SolverConfig& s) {
   map.read("avx512", s.avx512);
   map.read("threads", s.threads);
   map.read("adaptive_threads", s.adaptive_threads);
+  map.read("taut_chains", s.taut_chains);
   map.read("sleep_speed", s.sleep_speed);
   map.read("sleep_time", s.sleep_time);
   map.read("search_window", s.search_window);

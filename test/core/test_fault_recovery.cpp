@@ -24,14 +24,6 @@ SceneConfig swingingCloth() {
   return scene;
 }
 
-// The first free (non-pinned) particle: the one InjectedFault corrupts.
-int firstFreeParticle(const Simulation& sim) {
-  for (int i = 0; i < sim.particles().size(); ++i) {
-    if (!sim.particles().isKinematic(i)) return i;
-  }
-  return -1;
-}
-
 void expectStepUndone(Simulation& sim, InjectedFault injected, StepFault::Kind expected) {
   for (int k = 0; k < 20; ++k) sim.step();
   const Vec3Array before = sim.particles().position;
@@ -57,8 +49,8 @@ void expectStepUndone(Simulation& sim, InjectedFault injected, StepFault::Kind e
   EXPECT_TRUE(allFinite(sim.particles()));
   EXPECT_EQ(sim.restoredSteps(), 1u);
   EXPECT_FALSE(sim.lastStepRestored());
-  const int free = firstFreeParticle(sim);
-  EXPECT_GT((sim.particles().position[free] - before[free]).norm(), 1e-3)
+  const int corner = sim.particles().size() - 1;  // free, and it swings (the top row is held)
+  EXPECT_GT((sim.particles().position[corner] - before[corner]).norm(), 1e-3)
       << "the cloth did not move on after the recovery";
   EXPECT_LT(sim.computeMetrics().max_strain, 0.05);
 }
