@@ -40,6 +40,8 @@ class TautChains {
   int hold(Particles& p);
   // Frees the held particles again (their mass restored); call after the step.
   void release(Particles& p);
+  // A step that holds nothing (the option off, or links that can stretch): no held list.
+  void forget() { held_.clear(); }
   const std::vector<Held>& held() const { return held_; }
   bool empty() const { return lines_.empty(); }
 

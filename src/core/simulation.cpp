@@ -437,7 +437,13 @@ void Simulation::updateKinematicTargets(double dt) {
     }
   }
   // Taut chains between the kinematic particles join them for this step (released in step()).
-  if (scene_.solver.taut_chains && chainsInextensible()) taut_chains_.hold(particles_);
+  // Off, none is held, and the last held list goes too: release() must not free a particle a
+  // gripper has grasped since.
+  if (scene_.solver.taut_chains && chainsInextensible()) {
+    taut_chains_.hold(particles_);
+  } else {
+    taut_chains_.forget();
+  }
 }
 
 // Links that cannot stretch: only then is a taut chain's straight shape the only one it may take.

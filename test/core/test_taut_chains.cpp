@@ -132,6 +132,31 @@ TEST(TautChains, PulledApartTheRowStretchesEvenly) {
   }
 }
 
+// Turned off live after holding the row, then a gripper grasps a particle the row held: the grasp
+// stands after the step (nothing releases what the option no longer holds), and it is grasped
+// between steps too, when the held row is free (it was kinematic only inside a step).
+TEST(TautChains, TurnedOffLiveLeavesAGraspAlone) {
+  SceneConfig scene = swingingCloth(true);
+  GripperConfig gripper;
+  gripper.name = "hand";
+  gripper.radius = 0.01;
+  Waypoint above;  // over particle 5 of the top row, holding nothing
+  above.pose = test::makePose(Vec3(5 * kSpacing, 0.0, 0.0));
+  gripper.trajectory = {above};
+  scene.grippers = {gripper};
+  Simulation sim(scene);
+  for (int k = 0; k < 10; ++k) sim.step();
+  ASSERT_EQ(static_cast<int>(sim.tautChains().held().size()), kSide - 2);
+  SolverConfig solver = sim.scene().solver;
+  solver.taut_chains = false;
+  sim.setSolverConfig(solver);
+  ASSERT_EQ(sim.setGrasp(0, true).grasped_count, 1);
+  sim.step();
+  EXPECT_TRUE(sim.tautChains().held().empty());
+  EXPECT_TRUE(sim.particles().isKinematic(5));
+  EXPECT_TRUE(sim.gripperGrasping(0));
+}
+
 // Links that can stretch have more than one shape between the same ends: a compliant cloth, pbd
 // with a stretch stiffness under 1 and the explicit springs are never held.
 TEST(TautChains, OnlyInextensibleLinksAreHeld) {
