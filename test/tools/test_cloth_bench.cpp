@@ -95,6 +95,18 @@ TEST(ClothBench, CountsTheStepsOfLinksAlone) {
   EXPECT_EQ(bending.at("columns_steps"), "0");
 }
 
+// held_particles: the 8 particles of the small cloth's top row between its two pinned corners,
+// held straight in every step (solver.taut_chains), none with the option off.
+TEST(ClothBench, CountsTheParticlesOfTautChains) {
+  const auto held = keyValues(runBench("--duration 0.5" + kSmall).out);
+  ASSERT_EQ(held.count("held_particles"), 1u);
+  EXPECT_EQ(held.at("held_particles"), "8");
+  const auto off =
+      keyValues(runBench("--duration 0.5 --set solver.taut_chains=false" + kSmall).out);
+  ASSERT_EQ(off.count("held_particles"), 1u);
+  EXPECT_EQ(off.at("held_particles"), "0");
+}
+
 TEST(ClothBench, WritesPositionsAndMeshOfTheFinalState) {
   const std::string positions = ::testing::TempDir() + "bench_positions.csv";
   const std::string mesh = ::testing::TempDir() + "bench_mesh.obj";
