@@ -183,6 +183,11 @@ SWINGING_VARIANTS = {
     # The top row between the pinned corners is exactly taut: solver.taut_chains (on by default,
     # taut_chains.h) holds it straight. Off, the sweep has to pull it straight (what the option
     # bought: 60 substeps instead of 36 for both targets, README "Taut chains held straight").
+    # Fewer levels: with the top row held, 2 levels meet both targets at 34-36 substeps as 5 do,
+    # for less work a substep (single runs, 2026-12-06; doc/performance.md, "Taut chains held
+    # straight").
+    'xpbd + 2 levels': (['solver.levels=2'], {'variant': 'levels_2'},
+                        substeps_only([30, 32, 34, 36, 40])),
     'xpbd + levels, taut chains off': (['solver.levels=5', 'solver.taut_chains=false'],
                                        {'variant': 'levels_taut_chains_off'},
                                        substeps_only([36, 40, 50, 60, 80])),
@@ -285,6 +290,7 @@ def swinging100_runs(quick):
                 # substeps target 2 needed before the option.
                 ('xpbd + levels, taut chains off', levels + ['solver.taut_chains=false'],
                  substeps_only([96, 112, 120, 124, 128, 140])),
+                ('xpbd + 4 levels', ['solver.levels=4'], substeps_only([80, 88, 96])),
                 ('xpbd + levels, AVX2 only', levels + ['solver.avx512=false'],
                  substeps_only([96, 128])),
                 ('xpbd + levels, 2 threads', levels + ['solver.threads=2'],

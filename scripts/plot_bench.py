@@ -36,6 +36,8 @@ STYLES = [
     ('xpbd + levels', dict(color='darkgreen', marker='h')),
     ('xpbd + levels, interpolated', dict(color='tab:pink', marker='X')),
     # solver.taut_chains=false: the pinned top row swept straight instead of held straight.
+    ('xpbd + 2 levels', dict(color='seagreen', marker='p')),
+    ('xpbd + 4 levels', dict(color='seagreen', marker='p')),
     ('xpbd + levels, taut chains off', dict(color='limegreen', marker='H')),
     ('xpbd, taut chains off', dict(color='lightskyblue', marker='o')),
     # The same build at solver.avx512=false: four links a register instead of eight.
@@ -491,7 +493,7 @@ ISSUE_BULLET_MS = {'bullet': 22.2, 'bullet, one diagonal': 16.6}
 SWING_TARGETS = ((1, 1.6, 5.0, 50), (2, 6.5, 20.0, 100))
 # The curves a target's setting is chosen from, cheapest first: with the top row held straight
 # (solver.taut_chains) plain xpbd meets target 2 at fewer milliseconds than the levels.
-SWING_TARGET_CURVES = ('xpbd', 'xpbd + levels')
+SWING_TARGET_CURVES = ('xpbd', 'xpbd + levels', 'xpbd + 2 levels', 'xpbd + 4 levels')
 
 
 def target_met(ms, goal, fallback):

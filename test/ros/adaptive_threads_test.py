@@ -3,7 +3,9 @@
 # /diagnostics carries the count of steps run on the calling thread alone since the last report.
 # The node with the choice on (solver.threads 2) reports some: its first probe, a few steps after
 # the start, runs on the calling thread whatever the times. The node with it off reports 0 in
-# every report. Both report steps, so both keep stepping.
+# every report. Both report steps, so both keep stepping. Both also report the particles held
+# straight in the last step (solver.taut_chains): the 8 of the scene's top row, between its two
+# pinned corners.
 #
 # /usr/bin/python3 on purpose: a pyenv python3 earlier on PATH has no rospy.
 import sys
@@ -16,12 +18,14 @@ import rostest
 from diagnostic_msgs.msg import DiagnosticArray
 
 KEY = 'steps on the calling thread alone (since last report; solver.adaptive_threads)'
+HELD_KEY = 'particles held straight (last step; solver.taut_chains)'
 
 
 class AdaptiveThreadsTest(unittest.TestCase):
     def setUp(self):
         self.lock = threading.Lock()
-        self.reports = {'cloth_adaptive': [], 'cloth_fixed': []}  # (one-thread steps, steps)
+        # (one-thread steps, steps, particles held straight) per report
+        self.reports = {'cloth_adaptive': [], 'cloth_fixed': []}
         rospy.Subscriber('/diagnostics', DiagnosticArray, self.on_diagnostics, queue_size=20)
 
     def on_diagnostics(self, msg):
@@ -35,7 +39,8 @@ class AdaptiveThreadsTest(unittest.TestCase):
                 # A missing key fails the test below (-1 steps), not this callback, whose
                 # exceptions rospy only logs.
                 self.reports[node].append((int(values.get(KEY, -1)),
-                                           int(values.get('steps since last report', -1))))
+                                           int(values.get('steps since last report', -1)),
+                                           int(values.get(HELD_KEY, -1))))
 
     def test_the_adaptive_node_counts_its_one_thread_steps(self):
         deadline = time.time() + 30.0
@@ -43,19 +48,22 @@ class AdaptiveThreadsTest(unittest.TestCase):
             with self.lock:
                 adaptive = list(self.reports['cloth_adaptive'])
                 fixed = list(self.reports['cloth_fixed'])
-            if sum(s for s, _ in adaptive) > 0 and len(fixed) >= 3 and len(adaptive) >= 3:
+            if sum(r[0] for r in adaptive) > 0 and len(fixed) >= 3 and len(adaptive) >= 3:
                 break
             time.sleep(0.2)
-        self.assertGreater(sum(s for s, _ in adaptive), 0, adaptive)
+        self.assertGreater(sum(r[0] for r in adaptive), 0, adaptive)
         self.assertGreaterEqual(len(fixed), 3, fixed)
-        self.assertEqual(sum(s for s, _ in fixed), 0, fixed)
+        self.assertEqual(sum(r[0] for r in fixed), 0, fixed)
         # Both step: every report after the first counts steps, and never more on one thread
         # than it ran.
         for node, reports in (('cloth_adaptive', adaptive), ('cloth_fixed', fixed)):
-            self.assertGreater(sum(n for _, n in reports[1:]), 0, node)
-            for solo, steps in reports:
+            self.assertGreater(sum(r[1] for r in reports[1:]), 0, node)
+            for solo, steps, _ in reports:
                 self.assertGreaterEqual(solo, 0, (node, KEY, reports))
                 self.assertLessEqual(solo, steps, node)
+            # Every report after the first (which may come before a step) has the top row held.
+            for _, _, held in reports[1:]:
+                self.assertEqual(held, 8, (node, HELD_KEY, reports))
 
 
 if __name__ == '__main__':
