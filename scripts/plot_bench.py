@@ -538,6 +538,7 @@ def machine_yardstick(swinging, swinging100, cheapest_both):
 # setting's name in issue_yardstick.csv, goal ms, fallback ms or None, strains checked).
 YARDSTICK_TARGETS = (
     (1, 'today: target 1, levels 36x1, both diagonals', 1.6, 5.0, True),
+    (1, 'today: target 1, 2 levels 34x1, both diagonals', 1.6, 5.0, True),
     (1, 'today: target 1, levels 40x1, one diagonal', 1.6, 5.0, True),
     (2, 'today: target 2, 100x100 xpbd 104x1, both diagonals', 6.5, 20.0, True),
     (2, 'today: target 2, 100x100 levels 96x1, both diagonals', 6.5, 20.0, True),
