@@ -121,7 +121,8 @@ struct SolverConfig {
   // far apart as its rest lengths add up to (the top row of a cloth pinned at both top corners)
   // is held straight, its one possible shape, instead of being swept towards it (taut_chains.h).
   // Only while the links are inextensible: cloth.stretch_compliance 0, and not pbd with
-  // solver.stretch_stiffness < 1 nor mass_spring.
+  // solver.stretch_stiffness < 1 nor mass_spring; and not with cloth.tethers, which hold such a
+  // chain already (each of its particles is tethered to both ends).
   bool taut_chains = true;
   // solver.search_window: substeps one contact search (particle-particle and self-collision
   // candidates) covers. 0 (the default): chosen per step from the last one's candidates

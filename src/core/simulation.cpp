@@ -438,8 +438,13 @@ void Simulation::updateKinematicTargets(double dt) {
   }
   // Taut chains between the kinematic particles join them for this step (released in step()).
   // Off, none is held, and the last held list goes too: release() must not free a particle a
-  // gripper has grasped since.
-  if (scene_.solver.taut_chains && chainsInextensible()) {
+  // gripper has grasped since. With tethers (cloth.tethers) a taut chain's particles are already
+  // held: each is tethered to both ends, and the two tethers' spheres meet only at its place on
+  // the segment. Holding them as kinematic particles as well changed nothing there but the
+  // order of the sweep's corrections, and that for the worse: config/hanging.yaml at rest ended
+  // at 0.12 % strain (compression next to its side edges) against 0.0042 % (doc/performance.md,
+  // "Taut chains held straight").
+  if (scene_.solver.taut_chains && !scene_.cloth.tethers && chainsInextensible()) {
     taut_chains_.hold(particles_);
   } else {
     taut_chains_.forget();

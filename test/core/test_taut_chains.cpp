@@ -158,7 +158,8 @@ TEST(TautChains, TurnedOffLiveLeavesAGraspAlone) {
 }
 
 // Links that can stretch have more than one shape between the same ends: a compliant cloth, pbd
-// with a stretch stiffness under 1 and the explicit springs are never held.
+// with a stretch stiffness under 1 and the explicit springs are never held; nor is a tethered
+// cloth's row, which its tethers hold already.
 TEST(TautChains, OnlyInextensibleLinksAreHeld) {
   SceneConfig compliant = swingingCloth(true);
   compliant.cloth.stretch_compliance = 1e-6;
@@ -168,11 +169,13 @@ TEST(TautChains, OnlyInextensibleLinksAreHeld) {
   SceneConfig springs = swingingCloth(true);
   springs.solver.method = Method::kMassSpring;
   springs.solver.substeps = 40;
+  SceneConfig tethered = swingingCloth(true);  // the tethers hold the row already
+  tethered.cloth.tethers = true;
   SceneConfig rigid_pbd = swingingCloth(true);
   rigid_pbd.solver.method = Method::kPbd;
   SceneConfig verlet = swingingCloth(true);
   verlet.solver.method = Method::kVerlet;
-  for (const SceneConfig* scene : {&compliant, &soft_pbd, &springs}) {
+  for (const SceneConfig* scene : {&compliant, &soft_pbd, &springs, &tethered}) {
     Simulation sim(*scene);
     for (int k = 0; k < 10; ++k) sim.step();
     EXPECT_TRUE(sim.tautChains().held().empty()) << toString(scene->solver.method);
