@@ -84,10 +84,10 @@ class Simulation {
   int gripperIndex(const std::string& name) const;
   int gripperCount() const { return static_cast<int>(grippers_.size()); }
   const std::string& gripperName(int gripper) const;
-  // The pose the gripper reaches at the end of the next step. A live pose stops its trajectory.
-  // A pose with a poseProblem() is refused (false) and the gripper keeps its course.
   // solver.taut_chains: the particles held straight in the last step, and the ends holding them.
   const TautChains& tautChains() const { return taut_chains_; }
+  // The pose the gripper reaches at the end of the next step. A live pose stops its trajectory.
+  // A pose with a poseProblem() is refused (false) and the gripper keeps its course.
   bool setGripperPose(int gripper, const Pose& pose);
   const Pose& gripperPose(int gripper) const;
   bool gripperGrasping(int gripper) const;
