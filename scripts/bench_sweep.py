@@ -180,14 +180,14 @@ SWINGING_VARIANTS = {
     # grid has (lines 25, 13, 7, 4, 2).
     'xpbd + levels': (['solver.levels=5'], {'variant': 'levels'},
                       substeps_only([10, 20, 30, 36, 40, 50, 60, 80, 120])),
-    # The top row between the pinned corners is exactly taut: solver.taut_chains (on by default,
-    # taut_chains.h) holds it straight. Off, the sweep has to pull it straight (what the option
-    # bought: 60 substeps instead of 36 for both targets, README "Taut chains held straight").
     # Fewer levels: with the top row held, 2 levels meet both targets at 34-36 substeps as 5 do,
     # for less work a substep (single runs, 2026-12-06; doc/performance.md, "Taut chains held
     # straight").
     'xpbd + 2 levels': (['solver.levels=2'], {'variant': 'levels_2'},
                         substeps_only([30, 32, 34, 36, 40])),
+    # The top row between the pinned corners is exactly taut: solver.taut_chains (on by default,
+    # taut_chains.h) holds it straight. Off, the sweep has to pull it straight (what the option
+    # bought: 60 substeps instead of 36 for both targets, README "Taut chains held straight").
     'xpbd + levels, taut chains off': (['solver.levels=5', 'solver.taut_chains=false'],
                                        {'variant': 'levels_taut_chains_off'},
                                        substeps_only([36, 40, 50, 60, 80])),

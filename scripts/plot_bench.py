@@ -35,9 +35,10 @@ STYLES = [
     ('xpbd jacobi', dict(color='tab:purple', marker='v')),
     ('xpbd + levels', dict(color='darkgreen', marker='h')),
     ('xpbd + levels, interpolated', dict(color='tab:pink', marker='X')),
-    # solver.taut_chains=false: the pinned top row swept straight instead of held straight.
+    # Fewer levels (2 at 50 x 50, 4 at 100 x 100; each chart has one of them).
     ('xpbd + 2 levels', dict(color='seagreen', marker='p')),
     ('xpbd + 4 levels', dict(color='seagreen', marker='p')),
+    # solver.taut_chains=false: the pinned top row swept straight instead of held straight.
     ('xpbd + levels, taut chains off', dict(color='limegreen', marker='H')),
     ('xpbd, taut chains off', dict(color='lightskyblue', marker='o')),
     # The same build at solver.avx512=false: four links a register instead of eight.

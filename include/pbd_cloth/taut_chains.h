@@ -43,7 +43,6 @@ class TautChains {
   // A step that holds nothing (the option off, or links that can stretch): no held list.
   void forget() { held_.clear(); }
   const std::vector<Held>& held() const { return held_; }
-  bool empty() const { return lines_.empty(); }
 
  private:
   struct Line {

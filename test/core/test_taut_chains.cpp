@@ -67,28 +67,35 @@ TEST(TautChains, HoldsATautRowOnItsLine) {
   EXPECT_TRUE(swept.tautChains().held().empty());
 }
 
-// Two grippers hold the top corners and then move 5 cm towards each other: while they are the
-// row's length apart the row is held; once closer it is slack and free, and sags.
-TEST(TautChains, ASlackRowIsFree) {
-  SceneConfig scene = swingingCloth(true);
+// Two grippers, one at each top corner, grasp it at t = 0, hold still until `still_until` and then
+// move by `outward` each (negative: towards each other) until `moved_at`; the pins are left out.
+void holdCornersThenMove(SceneConfig& scene, double still_until, double moved_at, double outward) {
   scene.cloth.pinned.clear();
   for (int g = 0; g < 2; ++g) {
     GripperConfig gripper;
     gripper.name = g == 0 ? "left" : "right";
     gripper.radius = 0.01;
     const double x = g == 0 ? 0.0 : (kSide - 1) * kSpacing;
-    const double inward = g == 0 ? 0.025 : -0.025;
-    Waypoint hold, still, closer;
-    hold.t = 0.0;
+    const double away = g == 0 ? -outward : outward;
+    Waypoint hold, still, moved;
     hold.pose = test::makePose(Vec3(x, 0.0, 0.0));
     hold.grasp = 1;
-    still.t = 0.5;
+    still.t = still_until;
     still.pose = hold.pose;
-    closer.t = 1.0;
-    closer.pose = test::makePose(Vec3(x + inward, 0.0, 0.0));
-    gripper.trajectory = {hold, still, closer};
+    moved.t = moved_at;
+    moved.pose = test::makePose(Vec3(x + away, 0.0, 0.0));
+    gripper.trajectory = {hold};
+    if (still_until > 0.0) gripper.trajectory.push_back(still);
+    gripper.trajectory.push_back(moved);
     scene.grippers.push_back(gripper);
   }
+}
+
+// Two grippers hold the top corners and then move 5 cm towards each other: while they are the
+// row's length apart the row is held; once closer it is slack and free, and sags.
+TEST(TautChains, ASlackRowIsFree) {
+  SceneConfig scene = swingingCloth(true);
+  holdCornersThenMove(scene, 0.5, 1.0, -0.025);
   Simulation sim(scene);
   int held_steps = 0, free_steps = 0;
   for (int k = 0; k < 90; ++k) {
@@ -107,23 +114,7 @@ TEST(TautChains, ASlackRowIsFree) {
 // where the sweep would pile the stretch up near the ends.
 TEST(TautChains, PulledApartTheRowStretchesEvenly) {
   SceneConfig scene = swingingCloth(true);
-  scene.cloth.pinned.clear();
-  const double width = (kSide - 1) * kSpacing;
-  for (int g = 0; g < 2; ++g) {
-    GripperConfig gripper;
-    gripper.name = g == 0 ? "left" : "right";
-    gripper.radius = 0.01;
-    const double x = g == 0 ? 0.0 : width;
-    const double outward = g == 0 ? -0.005 * width : 0.005 * width;
-    Waypoint hold, apart;
-    hold.t = 0.0;
-    hold.pose = test::makePose(Vec3(x, 0.0, 0.0));
-    hold.grasp = 1;
-    apart.t = 0.5;
-    apart.pose = test::makePose(Vec3(x + outward, 0.0, 0.0));
-    gripper.trajectory = {hold, apart};
-    scene.grippers.push_back(gripper);
-  }
+  holdCornersThenMove(scene, 0.0, 0.5, 0.005 * (kSide - 1) * kSpacing);
   Simulation sim(scene);
   for (int k = 0; k < 45; ++k) sim.step();
   ASSERT_EQ(static_cast<int>(sim.tautChains().held().size()), kSide - 2);
