@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "pbd_cloth/simulation.h"
+#include "pbd_cloth/sim/simulation.h"
 
 namespace pbd_cloth {
 

@@ -1,6 +1,6 @@
 #include "pbd_cloth/ros/pose_transformer.h"
 
-#include "pbd_cloth/simulation.h"
+#include "pbd_cloth/sim/simulation.h"
 
 #include <cmath>
 #include <sstream>

@@ -3,7 +3,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "pbd_cloth/shapes.h"
+#include "pbd_cloth/geometry/shapes.h"
 
 namespace pbd_cloth {
 namespace {

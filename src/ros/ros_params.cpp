@@ -5,7 +5,7 @@
 
 #include <ros/console.h>
 
-#include "pbd_cloth/scene_yaml.h"
+#include "pbd_cloth/scene/scene_yaml.h"
 
 namespace pbd_cloth {
 

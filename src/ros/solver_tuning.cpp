@@ -1,6 +1,6 @@
 #include "pbd_cloth/ros/solver_tuning.h"
 
-#include "pbd_cloth/simulation.h"
+#include "pbd_cloth/sim/simulation.h"
 
 namespace pbd_cloth {
 

@@ -2,9 +2,9 @@
 // parses with urdfdom). Plain paths are read with the standard library; file:// and package:// URIs
 // go through resource_retriever, as rviz and robot_state_publisher resolve them, so a URDF that
 // displays in rviz loads here too. No ROS master is involved.
-#include "pbd_cloth/scene_assets.h"
+#include "pbd_cloth/scene/scene_assets.h"
 
-#include "pbd_cloth/cloth_mesh.h"
+#include "pbd_cloth/sim/mesh_cloth.h"
 
 #include <assimp/config.h>
 #include <assimp/postprocess.h>

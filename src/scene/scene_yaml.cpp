@@ -1,9 +1,9 @@
 // Scene YAML -> SceneConfig with yaml-cpp. The reader is strict on purpose: a misspelt key that is
 // silently ignored leaves a default in place and costs a user an afternoon, so every map is checked
 // against its known keys before anything is read, and every conversion names the dotted key.
-#include "pbd_cloth/scene_yaml.h"
+#include "pbd_cloth/scene/scene_yaml.h"
 
-#include "pbd_cloth/scene_assets.h"
+#include "pbd_cloth/scene/scene_assets.h"
 
 #include <algorithm>
 #include <cctype>

@@ -14,9 +14,9 @@
 #include <vector>
 
 #include "bench_command_line.h"
-#include "pbd_cloth/depth_camera.h"
-#include "pbd_cloth/scene_yaml.h"
-#include "pbd_cloth/simulation.h"
+#include "pbd_cloth/sensors/depth_camera.h"
+#include "pbd_cloth/scene/scene_yaml.h"
+#include "pbd_cloth/sim/simulation.h"
 
 namespace {
 
@@ -66,7 +66,7 @@ const char kUsage[] =
     "  --sample-every <n>     sample the metrics every n steps instead (n >= 1)\n"
     "  --positions <file>     write the final positions as index,x,y,z lines (no header)\n"
     "  --mesh <file.obj>      write the final cloth as a Wavefront OBJ (v and 1-based f lines)\n"
-    "  --save-state <file>    write the final state (binary, sim_state.h): positions,\n"
+    "  --save-state <file>    write the final state (binary, saved_state.h): positions,\n"
     "                         velocities, grasps, body poses, contact caches\n"
     "  --load-state <file>    start from a state saved with --save-state on the same scene and\n"
     "                         run --duration more: a run of 2 s equals, bit for bit, a run of 1 s\n"

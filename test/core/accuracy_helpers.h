@@ -7,7 +7,7 @@
 #include <utility>
 #include <vector>
 
-#include "pbd_cloth/scene_config.h"
+#include "pbd_cloth/config/scene_config.h"
 #include "test_scenes.h"
 
 namespace pbd_cloth {

@@ -8,9 +8,9 @@
 #include <cmath>
 #include <string>
 
-#include "pbd_cloth/scene_config.h"
-#include "pbd_cloth/shapes.h"
-#include "pbd_cloth/simulation.h"
+#include "pbd_cloth/config/scene_config.h"
+#include "pbd_cloth/geometry/shapes.h"
+#include "pbd_cloth/sim/simulation.h"
 #include "test_scenes.h"
 
 namespace pbd_cloth {

@@ -11,8 +11,8 @@
 #include <utility>
 #include <vector>
 
-#include "pbd_cloth/scene_config.h"
-#include "pbd_cloth/triangle_mesh.h"
+#include "pbd_cloth/config/scene_config.h"
+#include "pbd_cloth/geometry/mesh_shape.h"
 
 namespace pbd_cloth {
 namespace test {

@@ -8,9 +8,9 @@
 #include <vector>
 
 #include "accuracy_helpers.h"
-#include "pbd_cloth/collisions.h"
-#include "pbd_cloth/simulation.h"
-#include "pbd_cloth/solver.h"
+#include "pbd_cloth/collision/collisions.h"
+#include "pbd_cloth/sim/simulation.h"
+#include "pbd_cloth/solver/solver.h"
 
 namespace pbd_cloth {
 namespace {

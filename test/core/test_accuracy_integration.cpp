@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "accuracy_helpers.h"
-#include "pbd_cloth/simulation.h"
+#include "pbd_cloth/sim/simulation.h"
 
 namespace pbd_cloth {
 namespace {

@@ -4,7 +4,7 @@
 
 #include <cstdio>
 
-#include "pbd_cloth/simulation.h"
+#include "pbd_cloth/sim/simulation.h"
 #include "test_scenes.h"
 
 namespace pbd_cloth {

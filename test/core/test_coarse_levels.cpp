@@ -4,11 +4,11 @@
 #include <algorithm>
 #include <cmath>
 
-#include "pbd_cloth/cloth_builder.h"
-#include "pbd_cloth/coarse_levels.h"
-#include "pbd_cloth/metrics.h"
-#include "pbd_cloth/scene_yaml.h"
-#include "pbd_cloth/simulation.h"
+#include "pbd_cloth/sim/cloth_builder.h"
+#include "pbd_cloth/constraints/coarse_levels.h"
+#include "pbd_cloth/sim/metrics.h"
+#include "pbd_cloth/scene/scene_yaml.h"
+#include "pbd_cloth/sim/simulation.h"
 #include "test_scenes.h"
 
 namespace pbd_cloth {

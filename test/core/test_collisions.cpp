@@ -14,11 +14,11 @@
 #include <vector>
 
 #include "collision_scenes.h"
-#include "pbd_cloth/metrics.h"
-#include "pbd_cloth/scene_yaml.h"
-#include "pbd_cloth/shapes.h"
-#include "pbd_cloth/simulation.h"
-#include "pbd_cloth/spatial_hash.h"
+#include "pbd_cloth/sim/metrics.h"
+#include "pbd_cloth/scene/scene_yaml.h"
+#include "pbd_cloth/geometry/shapes.h"
+#include "pbd_cloth/sim/simulation.h"
+#include "pbd_cloth/geometry/spatial_hash.h"
 
 namespace pbd_cloth {
 namespace {

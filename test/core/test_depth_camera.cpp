@@ -8,9 +8,9 @@
 #include <vector>
 
 #include "mesh_builders.h"
-#include "pbd_cloth/depth_camera.h"
-#include "pbd_cloth/scene_yaml.h"
-#include "pbd_cloth/simulation.h"
+#include "pbd_cloth/sensors/depth_camera.h"
+#include "pbd_cloth/scene/scene_yaml.h"
+#include "pbd_cloth/sim/simulation.h"
 #include "test_scenes.h"
 
 namespace pbd_cloth {

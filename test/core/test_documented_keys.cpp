@@ -11,7 +11,7 @@
 #include <sstream>
 #include <string>
 
-#include "pbd_cloth/scene_yaml.h"
+#include "pbd_cloth/scene/scene_yaml.h"
 
 namespace pbd_cloth {
 namespace {

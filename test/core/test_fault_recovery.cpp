@@ -5,8 +5,8 @@
 
 #include <cmath>
 
-#include "pbd_cloth/metrics.h"
-#include "pbd_cloth/simulation.h"
+#include "pbd_cloth/sim/metrics.h"
+#include "pbd_cloth/sim/simulation.h"
 #include "test_scenes.h"
 
 namespace pbd_cloth {

@@ -7,9 +7,9 @@
 #include <utility>
 #include <vector>
 
-#include "pbd_cloth/flat_hinges.h"
-#include "pbd_cloth/simulation.h"
-#include "pbd_cloth/stretch_links.h"
+#include "pbd_cloth/constraints/flat_hinges.h"
+#include "pbd_cloth/sim/simulation.h"
+#include "pbd_cloth/constraints/stretch_links.h"
 #include "test_scenes.h"
 
 namespace pbd_cloth {

@@ -8,7 +8,7 @@
 #include <memory>
 
 #include "collision_scenes.h"
-#include "pbd_cloth/simulation.h"
+#include "pbd_cloth/sim/simulation.h"
 
 namespace pbd_cloth {
 namespace {

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "collision_scenes.h"
-#include "pbd_cloth/simulation.h"
+#include "pbd_cloth/sim/simulation.h"
 
 namespace pbd_cloth {
 namespace {

@@ -8,7 +8,7 @@
 
 #include <string>
 
-#include "pbd_cloth/simulation.h"
+#include "pbd_cloth/sim/simulation.h"
 #include "test_scenes.h"
 
 namespace pbd_cloth {

@@ -7,8 +7,8 @@
 #include <cmath>
 #include <memory>
 
-#include "pbd_cloth/cloth_mesh.h"
-#include "pbd_cloth/simulation.h"
+#include "pbd_cloth/sim/mesh_cloth.h"
+#include "pbd_cloth/sim/simulation.h"
 #include "test_scenes.h"
 
 namespace pbd_cloth {

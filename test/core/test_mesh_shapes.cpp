@@ -8,8 +8,8 @@
 
 #include "collision_scenes.h"
 #include "mesh_builders.h"
-#include "pbd_cloth/shapes.h"
-#include "pbd_cloth/simulation.h"
+#include "pbd_cloth/geometry/shapes.h"
+#include "pbd_cloth/sim/simulation.h"
 
 namespace pbd_cloth {
 namespace {

@@ -12,9 +12,9 @@
 #include <vector>
 
 #include "mesh_builders.h"
-#include "pbd_cloth/path_boxes.h"
-#include "pbd_cloth/shapes.h"
-#include "pbd_cloth/simulation.h"
+#include "pbd_cloth/collision/path_boxes.h"
+#include "pbd_cloth/geometry/shapes.h"
+#include "pbd_cloth/sim/simulation.h"
 #include "test_scenes.h"
 
 namespace pbd_cloth {

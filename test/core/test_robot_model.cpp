@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "pbd_cloth/scene_assets.h"
+#include "pbd_cloth/scene/scene_assets.h"
 
 namespace pbd_cloth {
 namespace {

@@ -11,8 +11,8 @@
 #include <vector>
 
 #include "accuracy_helpers.h"
-#include "pbd_cloth/cloth_builder.h"
-#include "pbd_cloth/simulation.h"
+#include "pbd_cloth/sim/cloth_builder.h"
+#include "pbd_cloth/sim/simulation.h"
 
 namespace pbd_cloth {
 namespace {

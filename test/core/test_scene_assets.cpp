@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "pbd_cloth/scene_assets.h"
-#include "pbd_cloth/scene_yaml.h"
+#include "pbd_cloth/scene/scene_assets.h"
+#include "pbd_cloth/scene/scene_yaml.h"
 
 namespace pbd_cloth {
 namespace {

@@ -11,11 +11,11 @@
 #include <string>
 #include <vector>
 
-#include "pbd_cloth/cloth_builder.h"
-#include "pbd_cloth/metrics.h"
-#include "pbd_cloth/scene_assets.h"
-#include "pbd_cloth/scene_yaml.h"
-#include "pbd_cloth/simulation.h"
+#include "pbd_cloth/sim/cloth_builder.h"
+#include "pbd_cloth/sim/metrics.h"
+#include "pbd_cloth/scene/scene_assets.h"
+#include "pbd_cloth/scene/scene_yaml.h"
+#include "pbd_cloth/sim/simulation.h"
 
 namespace pbd_cloth {
 namespace {

@@ -1,7 +1,7 @@
 // Small scenes built in code for the core tests (the YAML reader has tests of its own).
 #pragma once
 
-#include "pbd_cloth/scene_config.h"
+#include "pbd_cloth/config/scene_config.h"
 
 namespace pbd_cloth {
 namespace test {

@@ -13,10 +13,10 @@
 #include <string>
 
 #include "collision_scenes.h"
-#include "pbd_cloth/cloth_mesh.h"
-#include "pbd_cloth/metrics.h"
-#include "pbd_cloth/scene_yaml.h"
-#include "pbd_cloth/simulation.h"
+#include "pbd_cloth/sim/mesh_cloth.h"
+#include "pbd_cloth/sim/metrics.h"
+#include "pbd_cloth/scene/scene_yaml.h"
+#include "pbd_cloth/sim/simulation.h"
 
 namespace pbd_cloth {
 namespace {

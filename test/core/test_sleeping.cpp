@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "collision_scenes.h"
-#include "pbd_cloth/simulation.h"
+#include "pbd_cloth/sim/simulation.h"
 #include "test_scenes.h"
 
 namespace pbd_cloth {

@@ -10,7 +10,7 @@
 #include <random>
 #include <vector>
 
-#include "pbd_cloth/tether_projection.h"
+#include "pbd_cloth/constraints/tether_projection.h"
 
 namespace pbd_cloth {
 namespace {

@@ -9,8 +9,8 @@
 #include <set>
 #include <utility>
 
-#include "pbd_cloth/metrics.h"
-#include "pbd_cloth/simulation.h"
+#include "pbd_cloth/sim/metrics.h"
+#include "pbd_cloth/sim/simulation.h"
 #include "test_scenes.h"
 
 namespace pbd_cloth {

@@ -1,7 +1,7 @@
 // An OBJ cloth (cloth.mesh) of any content: loaded with its checks (ConfigError naming the file
 // and the face or vertex, or warnings), then built and stepped, self-collision on.
 #include "fuzz_helpers.h"
-#include "pbd_cloth/scene_assets.h"
+#include "pbd_cloth/scene/scene_assets.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   pbd_cloth::SceneConfig scene;

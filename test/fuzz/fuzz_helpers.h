@@ -19,7 +19,7 @@
 #include <string>
 #include <typeinfo>
 
-#include "pbd_cloth/simulation.h"
+#include "pbd_cloth/sim/simulation.h"
 
 namespace pbd_cloth {
 namespace fuzz {

@@ -1,7 +1,7 @@
 // A mesh obstacle file of any content through assimp and our checks (STL, OBJ, PLY, chosen by the
 // first byte): a mesh that loads is then collided with a small cloth dropped on it.
 #include "fuzz_helpers.h"
-#include "pbd_cloth/scene_assets.h"
+#include "pbd_cloth/scene/scene_assets.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size == 0) return 0;

@@ -4,7 +4,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "fuzz_helpers.h"
-#include "pbd_cloth/scene_yaml.h"
+#include "pbd_cloth/scene/scene_yaml.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   YAML::Node root;

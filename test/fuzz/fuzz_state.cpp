@@ -6,8 +6,8 @@
 #include <sstream>
 
 #include "fuzz_helpers.h"
-#include "pbd_cloth/scene_yaml.h"
-#include "pbd_cloth/sim_state.h"
+#include "pbd_cloth/scene/scene_yaml.h"
+#include "pbd_cloth/state/saved_state.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   // test/fuzz/state_scene.yaml, found from this file's path (the fuzzers run from anywhere).

@@ -2,7 +2,7 @@
 // (ConfigError naming the link or the parameter), then the robot built beside a small cloth and
 // stepped.
 #include "fuzz_helpers.h"
-#include "pbd_cloth/scene_assets.h"
+#include "pbd_cloth/scene/scene_assets.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   pbd_cloth::SceneConfig scene;

@@ -9,8 +9,8 @@
 #include <string>
 
 #include "pbd_cloth/ros/ros_conversions.h"
-#include "pbd_cloth/scene_assets.h"
-#include "pbd_cloth/simulation.h"
+#include "pbd_cloth/scene/scene_assets.h"
+#include "pbd_cloth/sim/simulation.h"
 
 namespace pbd_cloth {
 namespace {

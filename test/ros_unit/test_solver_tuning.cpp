@@ -4,7 +4,7 @@
 #include <string>
 
 #include "pbd_cloth/ros/solver_tuning.h"
-#include "pbd_cloth/simulation.h"
+#include "pbd_cloth/sim/simulation.h"
 
 namespace pbd_cloth {
 namespace {

@@ -97,7 +97,7 @@
 #include "pbd_cloth/ros/real_time_factor.h"
 #include "pbd_cloth/ros/solver_reconfigure.h"
 #include "pbd_cloth/ros/step_clock.h"
-#include "pbd_cloth/simulation.h"
+#include "pbd_cloth/sim/simulation.h"
 
 namespace pbd_cloth {
 

@@ -15,7 +15,7 @@
 // ROS-free, so the policy is testable without a master.
 #pragma once
 
-#include "pbd_cloth/scene_config.h"
+#include "pbd_cloth/config/scene_config.h"
 
 namespace pbd_cloth {
 

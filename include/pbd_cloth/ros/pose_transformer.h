@@ -11,7 +11,7 @@
 #include <tf2_ros/buffer.h>
 
 #include "pbd_cloth/ros/input_rejections.h"
-#include "pbd_cloth/scene_config.h"
+#include "pbd_cloth/config/scene_config.h"
 
 namespace pbd_cloth {
 

@@ -11,8 +11,8 @@
 
 #include "pbd_cloth/ClothState.h"
 #include "pbd_cloth/SolverStats.h"
-#include "pbd_cloth/scene_config.h"
-#include "pbd_cloth/simulation.h"
+#include "pbd_cloth/config/scene_config.h"
+#include "pbd_cloth/sim/simulation.h"
 
 namespace pbd_cloth {
 

@@ -10,7 +10,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "pbd_cloth/ros/cloth_ros.h"
-#include "pbd_cloth/scene_config.h"
+#include "pbd_cloth/config/scene_config.h"
 
 namespace pbd_cloth {
 

@@ -1,4 +1,4 @@
-// The saved simulation state (sim_state.h) <-> pbd_cloth/SimState, for ~get_state and
+// The saved simulation state (saved_state.h) <-> pbd_cloth/SimState, for ~get_state and
 // ~set_state. Exact: doubles are copied as they are and quaternions are not normalised, so a state
 // given back continues bit for bit.
 #pragma once
@@ -6,7 +6,7 @@
 #include <string>
 
 #include "pbd_cloth/SimState.h"
-#include "pbd_cloth/sim_state.h"
+#include "pbd_cloth/state/saved_state.h"
 
 namespace pbd_cloth {
 

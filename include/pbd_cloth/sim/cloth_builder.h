@@ -1,0 +1,38 @@
+// Builds the particles and constraints of a scene: the rows x cols cloth grid (structural and shear
+// stretch constraints, bending hinges, triangles) and the granular particles.
+#pragma once
+
+#include "pbd_cloth/model/particles.h"
+#include "pbd_cloth/config/scene_config.h"
+
+namespace pbd_cloth {
+
+// Rotation of the grid from cloth.rpy (roll about x, then pitch about y, then yaw about z).
+Eigen::Matrix3d rotationFromRpy(const Eigen::Vector3d& rpy);
+
+// Where the cloth starts, with `rotation` = rotationFromRpy(cloth.rpy): grid particle (r, c) at
+// origin + R (c s, -r s, 0), and a mesh vertex (file units) at origin + R (mesh_scale v). The
+// builder places the particles there and validate() checks them against the bounds.
+inline Vec3 gridStartPosition(const ClothConfig& cloth, const Eigen::Matrix3d& rotation, int r,
+                              int c) {
+  return cloth.origin + rotation * Vec3(c * cloth.spacing, -r * cloth.spacing, 0.0);
+}
+inline Vec3 meshStartPosition(const ClothConfig& cloth, const Eigen::Matrix3d& rotation,
+                              const Vec3& vertex) {
+  return cloth.origin + rotation * (cloth.mesh_scale * vertex);
+}
+
+// Fills `particles` (cloth grid, then granular lattice) and `topology` from the scene. Pinned
+// particles get inverse mass 0.
+void buildScene(const SceneConfig& scene, Particles& particles, ClothTopology& topology);
+
+// The bending hinges of the cloth's triangles (grid or mesh, as topology.from_mesh says), their
+// rest shape taken from `rest` (the particles' build positions); replaces any hinges there are.
+// buildScene calls it when cloth.bend_compliance >= 0; Simulation when bending is turned on live.
+void buildBending(const Vec3Array& rest, ClothTopology& topology);
+
+// Isometric bending hinge on edge (x0,x1) with opposite vertices x2, x3, from rest positions.
+// Returns false for a degenerate (zero-area) hinge, which is then skipped.
+bool makeBendConstraint(const Vec3Array& rest, int i0, int i1, int i2, int i3, BendConstraint& out);
+
+}  // namespace pbd_cloth
