@@ -13,11 +13,11 @@
 #include <boost/make_shared.hpp>
 
 #include "pbd_cloth/ClothState.h"
-#include "pbd_cloth/sim/metrics.h"
 #include "pbd_cloth/ros/ros_conversions.h"
 #include "pbd_cloth/ros/ros_params.h"
 #include "pbd_cloth/ros/state_conversions.h"
 #include "pbd_cloth/scene/scene_assets.h"
+#include "pbd_cloth/sim/metrics.h"
 
 namespace pbd_cloth {
 namespace {

@@ -16,9 +16,9 @@
 #include <string>
 #include <vector>
 
-#include "pbd_cloth/sim/metrics.h"
 #include "pbd_cloth/config/scene_config.h"
 #include "pbd_cloth/scene/scene_yaml.h"
+#include "pbd_cloth/sim/metrics.h"
 
 namespace pbd_cloth {
 namespace bench {

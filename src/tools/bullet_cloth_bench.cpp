@@ -27,11 +27,11 @@
 #pragma GCC diagnostic pop
 
 #include "bench_command_line.h"
-#include "pbd_cloth/sim/cloth_builder.h"
 #include "pbd_cloth/collision/collisions.h"
-#include "pbd_cloth/sim/metrics.h"
-#include "pbd_cloth/scene/scene_yaml.h"
 #include "pbd_cloth/geometry/mesh_shape.h"
+#include "pbd_cloth/scene/scene_yaml.h"
+#include "pbd_cloth/sim/cloth_builder.h"
+#include "pbd_cloth/sim/metrics.h"
 
 namespace {
 

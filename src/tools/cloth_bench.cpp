@@ -14,8 +14,8 @@
 #include <vector>
 
 #include "bench_command_line.h"
-#include "pbd_cloth/sensors/depth_camera.h"
 #include "pbd_cloth/scene/scene_yaml.h"
+#include "pbd_cloth/sensors/depth_camera.h"
 #include "pbd_cloth/sim/simulation.h"
 
 namespace {

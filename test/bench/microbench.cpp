@@ -27,15 +27,15 @@
 #include <vector>
 
 #include "../core/mesh_builders.h"
-#include "pbd_cloth/sim/cloth_builder.h"
 #include "pbd_cloth/collision/collisions.h"
-#include "pbd_cloth/sensors/depth_camera.h"
 #include "pbd_cloth/constraints/flat_hinges.h"
+#include "pbd_cloth/constraints/stretch_links.h"
 #include "pbd_cloth/scene/scene_assets.h"
 #include "pbd_cloth/scene/scene_yaml.h"
+#include "pbd_cloth/sensors/depth_camera.h"
+#include "pbd_cloth/sim/cloth_builder.h"
 #include "pbd_cloth/sim/simulation.h"
 #include "pbd_cloth/solver/solver.h"
-#include "pbd_cloth/constraints/stretch_links.h"
 
 namespace pbd_cloth {
 namespace {

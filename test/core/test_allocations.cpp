@@ -15,8 +15,8 @@
 
 #include "mesh_builders.h"
 #include "obj_text.h"
-#include "pbd_cloth/sensors/depth_camera.h"
 #include "pbd_cloth/scene/scene_assets.h"
+#include "pbd_cloth/sensors/depth_camera.h"
 #include "pbd_cloth/sim/simulation.h"
 #include "test_scenes.h"
 

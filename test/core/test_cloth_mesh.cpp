@@ -12,11 +12,11 @@
 #include <vector>
 
 #include "obj_text.h"
+#include "pbd_cloth/scene/scene_assets.h"
+#include "pbd_cloth/scene/scene_yaml.h"
 #include "pbd_cloth/sim/cloth_builder.h"
 #include "pbd_cloth/sim/mesh_cloth.h"
 #include "pbd_cloth/sim/metrics.h"
-#include "pbd_cloth/scene/scene_assets.h"
-#include "pbd_cloth/scene/scene_yaml.h"
 #include "pbd_cloth/sim/simulation.h"
 #include "test_scenes.h"
 

@@ -4,10 +4,10 @@
 #include <algorithm>
 #include <cmath>
 
-#include "pbd_cloth/sim/cloth_builder.h"
 #include "pbd_cloth/constraints/coarse_levels.h"
-#include "pbd_cloth/sim/metrics.h"
 #include "pbd_cloth/scene/scene_yaml.h"
+#include "pbd_cloth/sim/cloth_builder.h"
+#include "pbd_cloth/sim/metrics.h"
 #include "pbd_cloth/sim/simulation.h"
 #include "test_scenes.h"
 

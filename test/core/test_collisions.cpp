@@ -14,11 +14,11 @@
 #include <vector>
 
 #include "collision_scenes.h"
-#include "pbd_cloth/sim/metrics.h"
-#include "pbd_cloth/scene/scene_yaml.h"
 #include "pbd_cloth/geometry/shapes.h"
-#include "pbd_cloth/sim/simulation.h"
 #include "pbd_cloth/geometry/spatial_hash.h"
+#include "pbd_cloth/scene/scene_yaml.h"
+#include "pbd_cloth/sim/metrics.h"
+#include "pbd_cloth/sim/simulation.h"
 
 namespace pbd_cloth {
 namespace {

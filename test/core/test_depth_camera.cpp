@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "mesh_builders.h"
-#include "pbd_cloth/sensors/depth_camera.h"
 #include "pbd_cloth/scene/scene_yaml.h"
+#include "pbd_cloth/sensors/depth_camera.h"
 #include "pbd_cloth/sim/simulation.h"
 #include "test_scenes.h"
 

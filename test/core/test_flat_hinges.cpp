@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "pbd_cloth/constraints/flat_hinges.h"
-#include "pbd_cloth/sim/simulation.h"
 #include "pbd_cloth/constraints/stretch_links.h"
+#include "pbd_cloth/sim/simulation.h"
 #include "test_scenes.h"
 
 namespace pbd_cloth {

@@ -11,10 +11,10 @@
 #include <string>
 #include <vector>
 
-#include "pbd_cloth/sim/cloth_builder.h"
-#include "pbd_cloth/sim/metrics.h"
 #include "pbd_cloth/scene/scene_assets.h"
 #include "pbd_cloth/scene/scene_yaml.h"
+#include "pbd_cloth/sim/cloth_builder.h"
+#include "pbd_cloth/sim/metrics.h"
 #include "pbd_cloth/sim/simulation.h"
 
 namespace pbd_cloth {

@@ -13,9 +13,9 @@
 #include <string>
 
 #include "collision_scenes.h"
+#include "pbd_cloth/scene/scene_yaml.h"
 #include "pbd_cloth/sim/mesh_cloth.h"
 #include "pbd_cloth/sim/metrics.h"
-#include "pbd_cloth/scene/scene_yaml.h"
 #include "pbd_cloth/sim/simulation.h"
 
 namespace pbd_cloth {

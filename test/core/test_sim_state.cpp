@@ -1,5 +1,5 @@
-// Saving and restoring the simulation state (saved_state.h): a run of 2 s equals, bit for bit, a run
-// of 1 s whose state is saved, written to the state file format, read back, set into a fresh
+// Saving and restoring the simulation state (saved_state.h): a run of 2 s equals, bit for bit, a
+// run of 1 s whose state is saved, written to the state file format, read back, set into a fresh
 // Simulation and run 1 s more; on scenes with a grasping gripper, moving obstacles, friction,
 // self-collision, granular particles and a robot with mesh links. A state that does not fit the
 // scene is refused with the field named, and nothing changes.
@@ -15,8 +15,8 @@
 #include <string>
 
 #include "pbd_cloth/scene/scene_yaml.h"
-#include "pbd_cloth/state/saved_state.h"
 #include "pbd_cloth/sim/simulation.h"
+#include "pbd_cloth/state/saved_state.h"
 
 namespace pbd_cloth {
 namespace {

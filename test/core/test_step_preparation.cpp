@@ -5,8 +5,8 @@
 #include <gtest/gtest.h>
 
 #include "collision_scenes.h"
-#include "pbd_cloth/state/saved_state.h"
 #include "pbd_cloth/sim/simulation.h"
+#include "pbd_cloth/state/saved_state.h"
 #include "test_scenes.h"
 
 namespace pbd_cloth {

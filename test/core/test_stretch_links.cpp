@@ -8,10 +8,10 @@
 #include <cmath>
 #include <thread>
 
-#include "pbd_cloth/sim/cloth_builder.h"
-#include "pbd_cloth/sim/simulation.h"
 #include "pbd_cloth/constraints/stretch_links.h"
 #include "pbd_cloth/parallel/worker_pool.h"
+#include "pbd_cloth/sim/cloth_builder.h"
+#include "pbd_cloth/sim/simulation.h"
 #include "test_scenes.h"
 
 namespace pbd_cloth {

@@ -8,9 +8,9 @@
 #include <thread>
 #include <vector>
 
-#include "pbd_cloth/sim/simulation.h"
 #include "pbd_cloth/parallel/thread_choice.h"
 #include "pbd_cloth/parallel/worker_pool.h"
+#include "pbd_cloth/sim/simulation.h"
 #include "test_scenes.h"
 
 namespace pbd_cloth {

@@ -65,13 +65,13 @@
 
 #include "pbd_cloth/collision/contact.h"
 #include "pbd_cloth/collision/particle_contacts.h"
-#include "pbd_cloth/model/particles.h"
 #include "pbd_cloth/collision/path_boxes.h"
-#include "pbd_cloth/config/scene_config.h"
 #include "pbd_cloth/collision/self_collision.h"
+#include "pbd_cloth/config/scene_config.h"
 #include "pbd_cloth/geometry/shapes.h"
-#include "pbd_cloth/state/saved_state.h"
+#include "pbd_cloth/model/particles.h"
 #include "pbd_cloth/parallel/worker_pool.h"
+#include "pbd_cloth/state/saved_state.h"
 
 namespace pbd_cloth {
 

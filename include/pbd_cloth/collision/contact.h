@@ -5,8 +5,8 @@
 
 #include <algorithm>
 
-#include "pbd_cloth/model/particles.h"
 #include "pbd_cloth/config/scene_config.h"
+#include "pbd_cloth/model/particles.h"
 
 namespace pbd_cloth {
 

@@ -6,8 +6,8 @@
 #include <vector>
 
 #include "pbd_cloth/collision/contact.h"
-#include "pbd_cloth/model/particles.h"
 #include "pbd_cloth/geometry/spatial_hash.h"
+#include "pbd_cloth/model/particles.h"
 
 namespace pbd_cloth {
 

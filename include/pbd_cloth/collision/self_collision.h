@@ -27,8 +27,8 @@
 #include <vector>
 
 #include "pbd_cloth/collision/contact.h"
-#include "pbd_cloth/model/particles.h"
 #include "pbd_cloth/geometry/triangle_tree.h"
+#include "pbd_cloth/model/particles.h"
 
 namespace pbd_cloth {
 

@@ -21,8 +21,8 @@
 
 #include <vector>
 
-#include "pbd_cloth/model/particles.h"
 #include "pbd_cloth/constraints/stretch_links.h"
+#include "pbd_cloth/model/particles.h"
 
 namespace pbd_cloth {
 

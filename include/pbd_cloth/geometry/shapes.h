@@ -10,9 +10,9 @@
 
 #include <memory>
 
-#include "pbd_cloth/model/particles.h"
 #include "pbd_cloth/config/scene_config.h"
 #include "pbd_cloth/geometry/mesh_shape.h"
+#include "pbd_cloth/model/particles.h"
 
 namespace pbd_cloth {
 

@@ -37,8 +37,8 @@
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/static_transform_broadcaster.h>
 
-#include "pbd_cloth/sensors/depth_camera.h"
 #include "pbd_cloth/ros/publish_ticks.h"
+#include "pbd_cloth/sensors/depth_camera.h"
 #include "pbd_cloth/sim/simulation.h"
 
 namespace pbd_cloth {

@@ -10,8 +10,8 @@
 #include <ros/time.h>
 #include <tf2_ros/buffer.h>
 
-#include "pbd_cloth/ros/input_rejections.h"
 #include "pbd_cloth/config/scene_config.h"
+#include "pbd_cloth/ros/input_rejections.h"
 
 namespace pbd_cloth {
 

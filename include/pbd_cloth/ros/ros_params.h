@@ -9,8 +9,8 @@
 #include <xmlrpcpp/XmlRpcValue.h>
 #include <yaml-cpp/yaml.h>
 
-#include "pbd_cloth/ros/cloth_ros.h"
 #include "pbd_cloth/config/scene_config.h"
+#include "pbd_cloth/ros/cloth_ros.h"
 
 namespace pbd_cloth {
 

@@ -24,9 +24,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "pbd_cloth/model/particles.h"
 #include "pbd_cloth/config/scene_config.h"
 #include "pbd_cloth/geometry/shapes.h"
+#include "pbd_cloth/model/particles.h"
 
 namespace pbd_cloth {
 

@@ -2,8 +2,8 @@
 // stretch constraints, bending hinges, triangles) and the granular particles.
 #pragma once
 
-#include "pbd_cloth/model/particles.h"
 #include "pbd_cloth/config/scene_config.h"
+#include "pbd_cloth/model/particles.h"
 
 namespace pbd_cloth {
 

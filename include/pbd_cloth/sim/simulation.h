@@ -8,13 +8,13 @@
 #include <string>
 #include <vector>
 
-#include "pbd_cloth/sim/metrics.h"
-#include "pbd_cloth/model/particles.h"
 #include "pbd_cloth/config/scene_config.h"
-#include "pbd_cloth/state/saved_state.h"
-#include "pbd_cloth/solver/solver.h"
 #include "pbd_cloth/constraints/taut_chains.h"
 #include "pbd_cloth/constraints/tethers.h"
+#include "pbd_cloth/model/particles.h"
+#include "pbd_cloth/sim/metrics.h"
+#include "pbd_cloth/solver/solver.h"
+#include "pbd_cloth/state/saved_state.h"
 
 namespace pbd_cloth {
 

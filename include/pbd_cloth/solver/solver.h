@@ -6,12 +6,12 @@
 #include <limits>
 #include <vector>
 
-#include "pbd_cloth/constraints/coarse_levels.h"
 #include "pbd_cloth/collision/collisions.h"
-#include "pbd_cloth/constraints/flat_hinges.h"
-#include "pbd_cloth/model/particles.h"
 #include "pbd_cloth/config/scene_config.h"
+#include "pbd_cloth/constraints/coarse_levels.h"
+#include "pbd_cloth/constraints/flat_hinges.h"
 #include "pbd_cloth/constraints/stretch_links.h"
+#include "pbd_cloth/model/particles.h"
 #include "pbd_cloth/parallel/thread_choice.h"
 #include "pbd_cloth/parallel/worker_pool.h"
 

@@ -31,8 +31,8 @@
 #include <string>
 #include <vector>
 
-#include "pbd_cloth/model/particles.h"
 #include "pbd_cloth/config/scene_config.h"
+#include "pbd_cloth/model/particles.h"
 
 namespace pbd_cloth {
 

@@ -7,8 +7,8 @@
 #include <tuple>
 #include <utility>
 
-#include "pbd_cloth/sim/mesh_cloth.h"
 #include "pbd_cloth/constraints/tethers.h"
+#include "pbd_cloth/sim/mesh_cloth.h"
 
 namespace pbd_cloth {
 
