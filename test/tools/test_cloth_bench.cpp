@@ -2,6 +2,7 @@
 // the package's source style and its generated meshes. The accuracy tests drive the core directly;
 // these check the tool the charts and the README figures come from.
 #include <gtest/gtest.h>
+#include <stdlib.h>
 #include <sys/wait.h>
 
 #include <algorithm>
@@ -400,6 +401,42 @@ TEST(SourceStyle, EveryCppFileIsClangFormatted) {
                                 " -print0 | xargs -0 clang-format --dry-run --Werror");
   EXPECT_EQ(run.status, 0) << "not clang-formatted (run clang-format -i on these):\n"
                            << run.out.substr(0, 4000);
+}
+
+// The rules of the house (doc/design.md): every #include of src/ and include/ keeps to the layering
+// (geometry below model below constraints and collision below solver below sim; the configuration
+// seen only from sim/; the core on Eigen and std alone; intrinsics only in kernel files).
+TEST(SourceStyle, EveryIncludeKeepsTheRulesOfTheHouse) {
+  const BenchRun run = runShell(std::string("/usr/bin/python3 '") + PBD_CLOTH_SOURCE_DIR +
+                                "/scripts/check_includes' '" + PBD_CLOTH_SOURCE_DIR + "'");
+  EXPECT_EQ(run.status, 0) << run.out;
+  EXPECT_NE(run.out.find(" 0 forbidden includes"), std::string::npos) << run.out;
+}
+
+// The checker itself fails on a forbidden include: a copy of the sources where geometry/ includes
+// the scene configuration and the core includes ROS.
+TEST(SourceStyle, TheIncludeCheckFailsOnAForbiddenInclude) {
+  char pattern[] = "/tmp/pbd_include_rules.XXXXXX";
+  ASSERT_NE(mkdtemp(pattern), nullptr);
+  const std::string copy = pattern;
+  const std::string source = PBD_CLOTH_SOURCE_DIR;
+  ASSERT_EQ(runShell("cp -rL '" + source + "/src' '" + source + "/include' '" + copy + "/'").status,
+            0);
+  {
+    std::ofstream shape(copy + "/include/pbd_cloth/geometry/shapes.h", std::ios::app);
+    shape << "#include \"pbd_cloth/config/scene_config.h\"\n";
+    std::ofstream solver(copy + "/src/core/solver/solver.cpp", std::ios::app);
+    solver << "#include <ros/ros.h>\n";
+  }
+  const BenchRun run =
+      runShell("/usr/bin/python3 '" + source + "/scripts/check_includes' '" + copy + "'");
+  runShell("rm -rf '" + copy + "'");
+  EXPECT_EQ(run.status, 1) << run.out;
+  EXPECT_NE(run.out.find("include/pbd_cloth/geometry/shapes.h"), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find("geometry/ may include only geometry (not config/)"), std::string::npos)
+      << run.out;
+  EXPECT_NE(run.out.find("src/core/solver/solver.cpp"), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find("not <ros/ros.h>"), std::string::npos) << run.out;
 }
 
 // The shipped STL meshes (config/meshes, urdf/meshes) are closed, outward and of their analytic
