@@ -410,7 +410,7 @@ def verdict(row):
 def swinging_summary(add, swinging, name='swinging', size=50):
     """Issue 12's benchmark: which settings reach 1 % max / 0.1 % mean structural strain."""
     add('')
-    add('## Swinging cloth (config/swinging.yaml%s, issue 12): cost of 1 %% max / 0.1 %% mean '
+    add('## Swinging cloth (config/swinging.yaml%s): cost of 1 %% max / 0.1 %% mean '
         'strain' % ('' if size == 50 else ' at %d x %d' % (size, size)))
     add('')
     add('%d x %d, 1 m, structural links and both diagonals per cell, zero compliance, no bending, '
@@ -595,7 +595,7 @@ def issue_yardstick_row(data_dir):
 def issue12_summary(add, data_dir, swinging, swinging100, fabric, towel, micro):
     """Issue 12's targets, each with what this run measured (all from the CSVs of doc/)."""
     add('')
-    add('## Issue 12 targets: what this run measured')
+    add('## Speed targets: what this run measured')
     add('')
     add('| # | target | measured (this run) | met |')
     add('|---|---|---|---|')
