@@ -4,6 +4,7 @@
 #
 # Imported from the test scripts' own directory (a script's directory is first on sys.path).
 import os
+import select
 import shutil
 import subprocess
 import tempfile
@@ -101,17 +102,27 @@ class ScreenshotCase(unittest.TestCase):
         for tool in ('Xvfb', 'xwd', '/usr/bin/convert', 'rviz'):
             self.assertTrue(shutil.which(tool), '%s is missing (scripts/setup_deps installs it)'
                             % tool)
-        display = 99
-        while (os.path.exists('/tmp/.X%d-lock' % display) or
-               os.path.exists('/tmp/.X11-unix/X%d' % display)):
-            display += 1
-        self.start(['Xvfb', ':%d' % display, '-screen', '0', '1024x768x24', '-nolisten', 'tcp'],
-                   'xvfb.log')
+        # Xvfb picks a free display itself and writes its number to a pipe (-displayfd) once it
+        # listens: two screenshot tests started side by side (scripts/run_tests runs rostests two
+        # at a time), or another checkout's, cannot take the same one, as they could when this
+        # looked for a free lock file and then started Xvfb on it.
+        read_end, write_end = os.pipe()
+        log = open(os.path.join(self.workdir, 'xvfb.log'), 'w')
+        process = subprocess.Popen(['Xvfb', '-displayfd', str(write_end), '-screen', '0',
+                                    '1024x768x24', '-nolisten', 'tcp'],
+                                   stdout=log, stderr=subprocess.STDOUT, pass_fds=(write_end,))
+        self.processes.append((process, 'xvfb.log'))
+        os.close(write_end)
+        number = b''
         deadline = time.time() + 10.0
-        while not os.path.exists('/tmp/.X11-unix/X%d' % display):
-            self.assertLess(time.time(), deadline, 'Xvfb did not start')
-            time.sleep(0.1)
-        return ':%d' % display
+        while not number.endswith(b'\n'):
+            ready, _, _ = select.select([read_end], [], [], max(0.0, deadline - time.time()))
+            self.assertTrue(ready, 'Xvfb did not start')
+            chunk = os.read(read_end, 16)
+            self.assertTrue(chunk, 'Xvfb did not start (it exited: %s)' % process.poll())
+            number += chunk
+        os.close(read_end)
+        return ':%d' % int(number)
 
     def start_rviz(self, display, config, node_name):
         env = dict(os.environ, DISPLAY=display)
