@@ -6,12 +6,12 @@
 #include <limits>
 #include <vector>
 
-#include "pbd_cloth/constraints/coarse_levels.h"
 #include "pbd_cloth/collision/collisions.h"
-#include "pbd_cloth/constraints/flat_hinges.h"
-#include "pbd_cloth/model/particles.h"
 #include "pbd_cloth/config/scene_config.h"
+#include "pbd_cloth/constraints/coarse_levels.h"
+#include "pbd_cloth/constraints/flat_hinges.h"
 #include "pbd_cloth/constraints/stretch_links.h"
+#include "pbd_cloth/model/particles.h"
 #include "pbd_cloth/parallel/thread_choice.h"
 #include "pbd_cloth/parallel/worker_pool.h"
 
@@ -95,8 +95,22 @@ class Solver {
   double projectTethers(Particles& p, const ClothTopology& topology);
   void applyJacobi(Particles& p, double& max_change);
   void updateVelocities(double h, Particles& p);
+  // The phases of step(), in its order.
+  void startStepStats();
+  void prepareStep(double h, Particles& p, const ClothTopology& topology);
+  void findContacts(double dt, Particles& p, const ClothTopology& topology, Collisions& collisions);
+  void enterColumns(const Particles& p, const ClothTopology& topology,
+                    const Collisions& collisions);
+  void predictSubstep(bool first_substep, double h, double s_end, Particles& p);
+  void projectSubstep(double h, Particles& p, const ClothTopology& topology,
+                      Collisions& collisions);
   void massSpringSubstep(double h, double s_end, Particles& p, const ClothTopology& topology,
                          Collisions& collisions);
+  void finishVelocities(double h, Particles& p);
+  void finishStep(double dt, double h, const Particles& p, Collisions& collisions);
+  void chooseNextThreads();
+  void massSpringForcesAndContacts(double h, double s_end, Particles& p,
+                                   const ClothTopology& topology, Collisions& collisions);
   double pbdStiffness(double k) const;
   double stretchAlpha(double h) const;
   double dampingFactor(double h) const;
