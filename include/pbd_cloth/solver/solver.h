@@ -95,8 +95,22 @@ class Solver {
   double projectTethers(Particles& p, const ClothTopology& topology);
   void applyJacobi(Particles& p, double& max_change);
   void updateVelocities(double h, Particles& p);
+  // The phases of step(), in its order.
+  void startStepStats();
+  void prepareStep(double h, Particles& p, const ClothTopology& topology);
+  void findContacts(double dt, Particles& p, const ClothTopology& topology, Collisions& collisions);
+  void enterColumns(const Particles& p, const ClothTopology& topology,
+                    const Collisions& collisions);
+  void predictSubstep(bool first_substep, double h, double s_end, Particles& p);
+  void projectSubstep(double h, Particles& p, const ClothTopology& topology,
+                      Collisions& collisions);
   void massSpringSubstep(double h, double s_end, Particles& p, const ClothTopology& topology,
                          Collisions& collisions);
+  void finishVelocities(double h, Particles& p);
+  void finishStep(double dt, double h, const Particles& p, Collisions& collisions);
+  void chooseNextThreads();
+  void massSpringForcesAndContacts(double h, double s_end, Particles& p,
+                                   const ClothTopology& topology, Collisions& collisions);
   double pbdStiffness(double k) const;
   double stretchAlpha(double h) const;
   double dampingFactor(double h) const;

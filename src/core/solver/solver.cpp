@@ -1,20 +1,15 @@
 #include "pbd_cloth/solver/solver.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 
 #include "pbd_cloth/constraints/flat_hinges.h"
 #include "pbd_cloth/constraints/tether_projection.h"
+#include "pbd_cloth/solver/scoped_timer.h"
 
 namespace pbd_cloth {
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
-double seconds(Clock::time_point a, Clock::time_point b) {
-  return std::chrono::duration<double>(b - a).count();
-}
 
 // Below this length a distance constraint has no direction: skipped (coincident particles).
 constexpr double kMinLength = 1e-12;
@@ -719,9 +714,8 @@ double Solver::projectPass(double h, Particles& p, const ClothTopology& topology
   max_change = std::max(max_change, projectTethers(p, topology));
   // Contacts last in each pass so the positions a pass ends with are free of penetration.
   // Timed on their own: the narrow phase is the part of a pass a scene's collisions add.
-  const auto contacts_begin = Clock::now();
+  ScopedTimer timer(stats_.contact_time);
   max_change = std::max(max_change, collisions.project(p, topology));
-  stats_.contact_time += seconds(contacts_begin, Clock::now());
   return max_change;
 }
 
@@ -767,6 +761,16 @@ void Solver::updateVelocities(double h, Particles& p) { advance(h, 1.0, true, fa
 // cloth model, not the collision handling.
 void Solver::massSpringSubstep(double h, double s_end, Particles& p, const ClothTopology& topology,
                                Collisions& collisions) {
+  {
+    ScopedTimer timer(stats_.project_time);
+    massSpringForcesAndContacts(h, s_end, p, topology, collisions);
+  }
+  ScopedTimer timer(stats_.update_time);
+  updateVelocities(h, p);
+}
+
+void Solver::massSpringForcesAndContacts(double h, double s_end, Particles& p,
+                                         const ClothTopology& topology, Collisions& collisions) {
   const double k = config_.spring_stiffness, damper = config_.spring_damping;
   for (int i = 0; i < p.size(); ++i) force_[i] = p.mass[i] * config_.gravity;
   startDegenerateCount();
@@ -897,15 +901,46 @@ void Solver::finishReactions(double dt, double h, const Particles& p,
   }
 }
 
+// The step of the seeds, phase by phase: prepare, find contacts, then for each substep predict and
+// project (or the explicit baseline's substep), update velocities, finish. Each phase's wall time
+// adds into its StepStats field.
 void Solver::step(double dt, Particles& p, const ClothTopology& topology, Collisions& collisions) {
-  const auto t_start = Clock::now();
   const int substeps = config_.substeps;
   const double h = dt / substeps;
-  stats_.substeps = substeps;
+  startStepStats();
+  {
+    ScopedTimer step_timer(stats_.step_wall_time);
+    prepareStep(h, p, topology);
+    findContacts(dt, p, topology, collisions);
+    enterColumns(p, topology, collisions);
+    for (int s = 0; s < substeps; ++s) {
+      const double s_begin = static_cast<double>(s) / substeps;
+      const double s_end = static_cast<double>(s + 1) / substeps;
+      collisions.setSubstepFraction(s_begin, s_end);
+      if (config_.method == Method::kMassSpring) {
+        massSpringSubstep(h, s_end, p, topology, collisions);
+        continue;
+      }
+      predictSubstep(s == 0, h, s_end, p);
+      projectSubstep(h, p, topology, collisions);
+    }
+    finishVelocities(h, p);
+    finishStep(dt, h, p, collisions);
+  }
+  chooseNextThreads();
+}
+
+// The stats a step reports start from zero (sim_time adds up over the steps).
+void Solver::startStepStats() {
+  stats_.substeps = config_.substeps;
   stats_.iterations = 0;
   stats_.predict_time = stats_.collide_time = stats_.project_time = stats_.update_time = 0.0;
   stats_.contact_time = 0.0;
+  stats_.step_wall_time = 0.0;
   startDegenerateCount();
+}
+
+void Solver::prepareStep(double h, Particles& p, const ClothTopology& topology) {
   p.step_start = p.position;
   if (config_.ordering == Ordering::kJacobi) countJacobiConstraints(p, topology);
   // The kinematic set and h are fixed for the step: each link's 1 / (w_i + w_j + alpha~) and each
@@ -925,85 +960,90 @@ void Solver::step(double dt, Particles& p, const ClothTopology& topology, Collis
     prepared_inverse_mass_ = p.inverse_mass;  // same size after the first: no allocation
   }
   coarse_.prepareStep(p);
+}
 
-  // Find contacts at the step start; every substep enforces them (Jolt's "collide" phase).
-  // Collisions::project searches again in a substep whose prediction left the swept boxes.
-  auto t0 = Clock::now();
+// Find contacts at the step start; every substep enforces them (Jolt's "collide" phase).
+// Collisions::project searches again in a substep whose prediction left the swept boxes.
+void Solver::findContacts(double dt, Particles& p, const ClothTopology& topology,
+                          Collisions& collisions) {
+  ScopedTimer timer(stats_.collide_time);
   collisions.setWorkerPool(pool_.threads() > 1 ? &pool_ : nullptr);
-  collisions.setSearchWindow(config_.search_window, substeps);
+  collisions.setSearchWindow(config_.search_window, config_.substeps);
   collisions.beginStep(p, topology, dt);
-  auto t1 = Clock::now();
-  stats_.collide_time += seconds(t0, t1);
-  in_columns_ = substeps > 0 && linksAlone(p, topology, collisions);
+}
+
+// A step of links alone keeps the particles in columns from its first prediction to its last
+// velocity update (linksAlone).
+void Solver::enterColumns(const Particles& p, const ClothTopology& topology,
+                          const Collisions& collisions) {
+  in_columns_ = config_.substeps > 0 && linksAlone(p, topology, collisions);
   stats_.links_in_columns = in_columns_;
   if (in_columns_) stateToColumns(p);
+}
 
-  for (int s = 0; s < substeps; ++s) {
-    const double s_begin = static_cast<double>(s) / substeps;
-    const double s_end = static_cast<double>(s + 1) / substeps;
-    collisions.setSubstepFraction(s_begin, s_end);
-    t0 = Clock::now();
-    if (config_.method == Method::kMassSpring) {
-      massSpringSubstep(h, s_end, p, topology, collisions);
-      t1 = Clock::now();
-      stats_.project_time += seconds(t0, t1);
-      updateVelocities(h, p);
-      stats_.update_time += seconds(t1, Clock::now());
-      continue;
-    }
-    // Predict; from the second substep on, fused with the last substep's velocity update.
-    if (s == 0) {
-      predict(h, s_end, p);
-    } else {
-      updateAndPredict(h, s_end, p);
-    }
-    t1 = Clock::now();
-    stats_.predict_time += seconds(t0, t1);
-
-    // XPBD multipliers start at zero every substep (Small Steps, Algorithm 1). The flat links'
-    // first pass writes theirs (projectStretch, lambda_from_zero); the others are cleared here.
-    if (config_.ordering == Ordering::kJacobi || !fastStretch(topology)) {
-      std::fill(stretch_lambda_.begin(), stretch_lambda_.end(), 0.0);
-    }
-    // The flat hinges' first pass writes theirs (projectFlatHinges, lambda_from_zero).
-    if (!flatBend(topology)) std::fill(bend_lambda_.begin(), bend_lambda_.end(), Vec3::Zero());
-    double omega = 1.0;  // solver.chebyshev: the last extrapolation's weight in this substep
-    for (int pass = 0; pass < config_.iterations; ++pass) {
-      ++stats_.iterations;
-      if (chebyshevKeeps(pass)) {
-        std::swap(chebyshev_previous_, chebyshev_current_);  // no copy: the buffers trade places
-        chebyshev_current_ = p.position;                     // same size: no allocation
-      }
-      const double max_change =
-          projectPass(h, p, topology, collisions, pass == 0, pass + 1 == config_.iterations);
-      if (pass >= 1 && chebyshevKeeps(pass)) omega = accelerate(pass, omega, p);
-      // Adaptive count (seed: "measuring the change from last iteration").
-      if (tracksLargestChange() && max_change < config_.tolerance) break;
-    }
-    addMultiplierReactions(p, topology);
-    stats_.project_time += seconds(t1, Clock::now());
+// Predict; from the second substep on, fused with the last substep's velocity update.
+void Solver::predictSubstep(bool first_substep, double h, double s_end, Particles& p) {
+  ScopedTimer timer(stats_.predict_time);
+  if (first_substep) {
+    predict(h, s_end, p);
+  } else {
+    updateAndPredict(h, s_end, p);
   }
-  // The last substep's velocity update (the others ran with the next prediction).
-  if (config_.method != Method::kMassSpring && substeps > 0) {
-    const auto t2 = Clock::now();
+}
+
+// The constraint passes of a substep (position-based methods: xpbd, pbd, verlet).
+void Solver::projectSubstep(double h, Particles& p, const ClothTopology& topology,
+                            Collisions& collisions) {
+  ScopedTimer timer(stats_.project_time);
+  // XPBD multipliers start at zero every substep (Small Steps, Algorithm 1). The flat links'
+  // first pass writes theirs (projectStretch, lambda_from_zero); the others are cleared here.
+  if (config_.ordering == Ordering::kJacobi || !fastStretch(topology)) {
+    std::fill(stretch_lambda_.begin(), stretch_lambda_.end(), 0.0);
+  }
+  // The flat hinges' first pass writes theirs (projectFlatHinges, lambda_from_zero).
+  if (!flatBend(topology)) std::fill(bend_lambda_.begin(), bend_lambda_.end(), Vec3::Zero());
+  double omega = 1.0;  // solver.chebyshev: the last extrapolation's weight in this substep
+  for (int pass = 0; pass < config_.iterations; ++pass) {
+    ++stats_.iterations;
+    if (chebyshevKeeps(pass)) {
+      std::swap(chebyshev_previous_, chebyshev_current_);  // no copy: the buffers trade places
+      chebyshev_current_ = p.position;                     // same size: no allocation
+    }
+    const double max_change =
+        projectPass(h, p, topology, collisions, pass == 0, pass + 1 == config_.iterations);
+    if (pass >= 1 && chebyshevKeeps(pass)) omega = accelerate(pass, omega, p);
+    // Adaptive count (seed: "measuring the change from last iteration").
+    if (tracksLargestChange() && max_change < config_.tolerance) break;
+  }
+  addMultiplierReactions(p, topology);
+}
+
+// The last substep's velocity update (the others ran with the next prediction; the explicit
+// baseline updates in its own substeps), then the particles leave the columns.
+void Solver::finishVelocities(double h, Particles& p) {
+  if (config_.method != Method::kMassSpring && config_.substeps > 0) {
+    ScopedTimer timer(stats_.update_time);
     updateVelocities(h, p);
-    stats_.update_time += seconds(t2, Clock::now());
   }
   if (in_columns_) {
     stateFromColumns(p);
     in_columns_ = false;
   }
+}
 
+void Solver::finishStep(double dt, double h, const Particles& p, Collisions& collisions) {
   finishReactions(dt, h, p, collisions);
   collisions.endStep();
   collisions.setWorkerPool(nullptr);  // lent for the step only
   stats_.sim_time += dt;
   stats_.degenerate_constraints = degenerate_in_pass_;
   stats_.first_degenerate_constraint = first_degenerate_in_pass_;
-  stats_.step_wall_time = seconds(t_start, Clock::now());
+}
+
+// The next step's threads, from this step's time (thread_choice.h): the same results either way.
+void Solver::chooseNextThreads() {
   stats_.threads_used = pool_.solo() ? 1 : pool_.threads();
   stats_.on_one_thread = pool_.solo() && pool_.threads() > 1;
-  // The next step's threads, from this step's time (thread_choice.h): the same results either way.
   if (config_.adaptive_threads && pool_.threads() > 1) {
     pool_.setSolo(thread_choice_.next(stats_.step_wall_time));
   }
