@@ -2,6 +2,7 @@
 // prediction_kernels.h).
 #include "pbd_cloth/solver/solver.h"
 
+#include "pbd_cloth/parallel/cpu_features.h"
 #include "pbd_cloth/solver/prediction_kernels.h"
 
 namespace pbd_cloth {
@@ -39,7 +40,7 @@ void Solver::advance(double h, double s_end, bool update, bool predict, Particle
   args.start = columns ? column_start_.columns().x : p.substep_start.front().data();
   const int particle_step = columns ? 1 : 3;
   const int coordinate_step = columns ? link_positions_.size() : 1;
-  const bool avx2 = config_.simd && stretchLinksUseAvx2();
+  const bool avx2 = config_.simd && cpuHasAvx2();
   // Threads take equal ranges of particles (each particle on its own).
   pool_.runRanges(n, [&](int begin, int end, int) {
     // A kinematic particle's velocity is the one it moved with over the substep, (x - x_start) /
