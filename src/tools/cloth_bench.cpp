@@ -72,7 +72,11 @@ const char kUsage[] =
     "                         run --duration more: a run of 2 s equals, bit for bit, a run of 1 s\n"
     "                         saved, loaded and run 1 s more. A file that does not fit the scene\n"
     "                         (particle count, bodies, non-finite values) exits with 2 and the\n"
-    "                         reason"
+    "                         reason\n"
+    "  --no-simd              the portable loops even where the processor has AVX2 or AVX-512\n"
+    "                         (the same results to the bit; for comparing the code paths)\n"
+    "  --no-avx512            AVX2 at most, even where the processor has AVX-512 (the same\n"
+    "                         results; for comparing the two register widths)\n"
     "  --depth <prefix>       after the run, render every camera of the scene's `cameras:` (each\n"
     "                         needs its pose: no tf here) and write <prefix><name>.pfm, the\n"
     "                         32-bit float depth image (Portable Float Map, rows bottom-up as\n"
@@ -99,6 +103,10 @@ struct Options : pbd_cloth::bench::CommonOptions {
   double target_max_strain = 0.0;  // > 0: search the cheapest setting instead of one run
   double target_mean_strain = 0.0;
   int max_substeps = 256;  // upper end of the search
+  // Comparison-only switches (once the scene keys solver.simd and solver.avx512): they set
+  // SolverConfig::simd and ::avx512, which change which code runs, never the results.
+  bool no_simd = false;
+  bool no_avx512 = false;
 };
 
 Options parseArguments(int argc, char** argv) {
@@ -125,6 +133,10 @@ Options parseArguments(int argc, char** argv) {
       options.depth = next();
     } else if (option == "--max-substeps") {
       options.max_substeps = bench::parseCount(option, next(), 1, 100000);
+    } else if (option == "--no-simd") {
+      options.no_simd = true;
+    } else if (option == "--no-avx512") {
+      options.no_avx512 = true;
     } else {
       return false;
     }
@@ -494,7 +506,9 @@ int searchCheapest(const pbd_cloth::SceneConfig& base, const Options& options) {
 }
 
 int run(const Options& options) {
-  const pbd_cloth::SceneConfig scene = pbd_cloth::bench::loadScene(options);
+  pbd_cloth::SceneConfig scene = pbd_cloth::bench::loadScene(options);
+  if (options.no_simd) scene.solver.simd = false;
+  if (options.no_avx512) scene.solver.avx512 = false;
   if (options.target_max_strain > 0.0 || options.target_mean_strain > 0.0) {
     return searchCheapest(scene, options);
   }

@@ -147,14 +147,12 @@ TEST(CoarseLevels, SwingingClothStretchesLessAtEqualSubsteps) {
 
 TEST(CoarseLevels, ReadFromTheScene) {
   const SceneConfig scene =
-      sceneFromYaml(YAML::Load("solver: {levels: 3, levels_interpolate: true}\n"
+      sceneFromYaml(YAML::Load("solver: {levels: 3}\n"
                                "cloth: {rows: 8, cols: 8, shear_diagonals: 2}"));
   EXPECT_EQ(scene.solver.levels, 3);
-  EXPECT_TRUE(scene.solver.levels_interpolate);
   EXPECT_EQ(scene.cloth.shear_diagonals, 2);
   const SceneConfig defaults = sceneFromYaml(YAML::Load(""));
   EXPECT_EQ(defaults.solver.levels, 0);
-  EXPECT_FALSE(defaults.solver.levels_interpolate);
   EXPECT_EQ(defaults.cloth.shear_diagonals, 1);
 }
 

@@ -217,6 +217,28 @@ TEST(ClothBench, RunsAreBitIdentical) {
   EXPECT_EQ(first, readFile(b));
 }
 
+// The comparison switches (once solver.simd and solver.avx512) change which code runs, never the
+// positions; the old keys name the flags that replaced them.
+TEST(ClothBench, NoSimdAndNoAvx512GiveTheSamePositions) {
+  const std::string a = ::testing::TempDir() + "bench_simd.csv";
+  const std::string b = ::testing::TempDir() + "bench_no_simd.csv";
+  const std::string c = ::testing::TempDir() + "bench_no_avx512.csv";
+  ASSERT_EQ(runBench("--duration 0.5 --positions " + a + kSmall).status, 0);
+  ASSERT_EQ(runBench("--duration 0.5 --no-simd --positions " + b + kSmall).status, 0);
+  ASSERT_EQ(runBench("--duration 0.5 --no-avx512 --positions " + c + kSmall).status, 0);
+  const std::string first = readFile(a);
+  EXPECT_FALSE(first.empty());
+  EXPECT_EQ(first, readFile(b));
+  EXPECT_EQ(first, readFile(c));
+  const BenchRun help = runShell(std::string(CLOTH_BENCH) + " --help");
+  EXPECT_NE(help.out.find("--no-simd"), std::string::npos);
+  EXPECT_NE(help.out.find("--no-avx512"), std::string::npos);
+  const BenchRun old_key = runBench("--duration 0.1 --set solver.simd=false");
+  EXPECT_EQ(old_key.status, 2);
+  EXPECT_NE(old_key.out.find("solver.simd: moved to cloth_bench --no-simd"), std::string::npos)
+      << old_key.out;
+}
+
 TEST(ClothBench, BadKeyOrArgumentExitsWithTwoAndNamesIt) {
   BenchRun run = runBench("--duration 0.1 --set solver.substepz=3");
   EXPECT_EQ(run.status, 2);

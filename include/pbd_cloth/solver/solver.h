@@ -1,6 +1,9 @@
 // The time step of the seeds: predict, find contacts, project constraints (relaxation), update
-// velocities. One class serves the four methods; all buffers are allocated in prepare(), so a step
-// allocates nothing.
+// velocities. One class serves the four methods (the explicit baseline through its own stepper,
+// mass_spring_stepper.h); all buffers are allocated in prepare(), so a step allocates nothing.
+// Its units, in src/core/solver/: solver.cpp (configuration and the step's phases), integration
+// and prediction_kernels (predict, update velocities), projection_pass, stretch_projection,
+// bend_projection, column_layout (a step of links alone), thread_tasks, chebyshev, reactions.
 #pragma once
 
 #include <limits>
@@ -14,6 +17,8 @@
 #include "pbd_cloth/model/particles.h"
 #include "pbd_cloth/parallel/thread_choice.h"
 #include "pbd_cloth/parallel/worker_pool.h"
+#include "pbd_cloth/solver/mass_spring_stepper.h"
+#include "pbd_cloth/solver/solver_terms.h"
 
 namespace pbd_cloth {
 
@@ -109,8 +114,6 @@ class Solver {
   void finishVelocities(double h, Particles& p);
   void finishStep(double dt, double h, const Particles& p, Collisions& collisions);
   void chooseNextThreads();
-  void massSpringForcesAndContacts(double h, double s_end, Particles& p,
-                                   const ClothTopology& topology, Collisions& collisions);
   double pbdStiffness(double k) const;
   double stretchAlpha(double h) const;
   double dampingFactor(double h) const;
@@ -163,7 +166,7 @@ class Solver {
   std::vector<double> prepared_inverse_mass_;
   Vec3Array jacobi_delta_;         // Jacobi: summed corrections per particle
   std::vector<int> jacobi_count_;  // Jacobi: stretch and bend constraints on each free particle
-  Vec3Array force_;                // mass_spring: force accumulator
+  MassSpringStepper mass_spring_;  // solver.method mass_spring: the explicit baseline
   std::vector<int> kinematic_particles_;  // the step's kinematic particles (startReactions)
   Vec3Array kinematic_velocity_;          // a kinematic particle's velocity kept across predict()
   // solver.chebyshev: each particle's position before the current pass (q^k) and before the one
@@ -184,17 +187,7 @@ class Solver {
   Vec3Array constraint_force_;
   Vec3Array support_force_;
   StepStats stats_;
-  // Stretch constraints skipped in the current pass because their particles coincide, and the
-  // first of them; the last pass's figures become the step's stats.
-  void startDegenerateCount() {
-    degenerate_in_pass_ = 0;
-    first_degenerate_in_pass_ = -1;
-  }
-  void noteDegenerate(int constraint) {
-    if (degenerate_in_pass_++ == 0) first_degenerate_in_pass_ = constraint;
-  }
-  int degenerate_in_pass_ = 0;
-  int first_degenerate_in_pass_ = -1;
+  DegenerateCount degenerate_;  // in the current pass; the last pass's become the step's stats
 };
 
 }  // namespace pbd_cloth

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <limits>
 
+#include "pbd_cloth/parallel/cpu_features.h"
+
 #if defined(__x86_64__) && defined(__GNUC__)
 #include <immintrin.h>
 #define PBD_CLOTH_HAVE_AVX2_PATH 1
@@ -177,11 +179,8 @@ __attribute__((flatten)) PBD_AVX512VL bool pathBoxesAvx512Vl(const Particles& p,
 
 PathBoxKernel bestPathBoxKernel(bool simd, bool avx512) {
 #ifdef PBD_CLOTH_HAVE_AVX2_PATH
-  static const bool has_avx2 = __builtin_cpu_supports("avx2");
-  static const bool has_avx512vl =
-      __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
-  if (simd && avx512 && has_avx512vl) return PathBoxKernel::kAvx512Vl;
-  if (simd && has_avx2) return PathBoxKernel::kAvx2;
+  if (simd && avx512 && cpuHasAvx512Vl()) return PathBoxKernel::kAvx512Vl;
+  if (simd && cpuHasAvx2()) return PathBoxKernel::kAvx2;
 #else
   (void)simd;
   (void)avx512;

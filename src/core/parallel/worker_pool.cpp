@@ -1,9 +1,5 @@
 #include "pbd_cloth/parallel/worker_pool.h"
 
-#if defined(__x86_64__)
-#include <immintrin.h>
-#endif
-
 namespace pbd_cloth {
 
 namespace {
@@ -13,8 +9,8 @@ namespace {
 constexpr int kSpins = 20000;
 
 inline void relax() {
-#if defined(__x86_64__)
-  _mm_pause();
+#if defined(__x86_64__) && defined(__GNUC__)
+  __builtin_ia32_pause();  // the PAUSE spin-wait hint (_mm_pause), without the intrinsics header
 #else
   std::this_thread::yield();
 #endif

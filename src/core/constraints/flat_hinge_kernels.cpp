@@ -1,9 +1,13 @@
+// The flat hinges' projection kernels (portable, AVX2, AVX-512VL), which round alike (built with
+// -ffp-contract=off, as every *_kernels*.cpp: CMakeLists.txt), and the per-step terms they read
+// (makeFlatHinge), under the same flags.
 #include "pbd_cloth/constraints/flat_hinges.h"
 
 #include <algorithm>
 #include <cmath>
 
 #include "pbd_cloth/constraints/stretch_links.h"
+#include "pbd_cloth/parallel/cpu_features.h"
 
 #if defined(__x86_64__) && defined(__GNUC__)
 #include <immintrin.h>
@@ -173,14 +177,7 @@ __attribute__((flatten)) PBD_AVX512VL double projectAvx512Vl(const FlatHinge* hi
 
 }  // namespace
 
-#ifdef PBD_CLOTH_HAVE_AVX2_PATH
-bool flatHingesUseAvx512Vl() {
-  static const bool has = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
-  return has;
-}
-#else
-bool flatHingesUseAvx512Vl() { return false; }
-#endif
+bool flatHingesUseAvx512Vl() { return cpuHasAvx512Vl(); }
 
 FlatHinge makeFlatHinge(const BendConstraint& con, const double* inverse_mass, double alpha,
                         double k, double min_weight) {
