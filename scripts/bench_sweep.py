@@ -22,6 +22,10 @@ REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 # 20 s. cloth_bench counts self-intersections at every metric sample, and on a cloth that has blown
 # up (finite, but spread over kilometres) one count takes seconds: such a run is stopped and
 # recorded as diverged (exit_status=timeout) instead of holding the sweep for minutes.
+# Code paths compared by cloth_bench's flags (the scene YAML offers what a user decides).
+COMMAND_LINE_SWITCHES = {'solver.simd=false': '--no-simd', 'solver.avx512=false': '--no-avx512'}
+
+
 def run_timeout(run):
     if run.scene in CLOTH_SCENES:
         steps = run.duration * 60.0
@@ -74,7 +78,11 @@ class Run(object):
         cmd = [os.path.join(bin_dir, self.tool), '--config', os.path.join('config', self.scene),
                '--duration', repr(self.duration), '--quiet']
         for assignment in self.sets:
-            cmd += ['--set', assignment]
+            # The comparison-only switches are cloth_bench's own flags, not scene keys.
+            if assignment in COMMAND_LINE_SWITCHES:
+                cmd.append(COMMAND_LINE_SWITCHES[assignment])
+            else:
+                cmd += ['--set', assignment]
         if self.sample_every and self.sweep != 'stability':
             cmd += ['--sample-every', str(self.sample_every)]
         if positions_file:
@@ -193,15 +201,11 @@ SWINGING_VARIANTS = {
                                        substeps_only([36, 40, 50, 60, 80])),
     'xpbd, taut chains off': (['solver.taut_chains=false'], {'variant': 'taut_chains_off'},
                               substeps_only([80, 160, 320])),
-    # HPBD's interpolation of each level's displacement to the finer particles: gains energy.
-    'xpbd + levels, interpolated': (['solver.levels=5', 'solver.levels_interpolate=true'],
-                                    {'variant': 'levels_interpolated'},
-                                    substeps_only([10, 20, 40, 80])),
-    # The same levels without the AVX2 path (solver.simd=false, the portable loop every x86-64 and
+    # The same levels without the AVX2 path (cloth_bench --no-simd, the portable loop every x86-64 and
     # other processors run): what SIMD buys, with bit-identical results.
     'xpbd + levels, portable loop': (['solver.levels=5', 'solver.simd=false'],
                                      {'variant': 'levels_portable'}, substeps_only([40, 60, 80])),
-    # AVX2 at most (solver.avx512=false) on a processor with AVX-512: four links a register
+    # AVX2 at most (cloth_bench --no-avx512) on a processor with AVX-512: four links a register
     # instead of eight, what the wider registers buy (the same results, bit for bit).
     'xpbd + levels, AVX2 only': (['solver.levels=5', 'solver.avx512=false'],
                                  {'variant': 'levels_avx2'}, substeps_only([40, 60, 80])),
@@ -220,17 +224,6 @@ SWINGING_VARIANTS = {
                            substeps_only([80, 160, 320])),
     'bullet, one diagonal': (['cloth.shear_diagonals=1'], {'variant': 'bullet_one_diagonal'},
                              substeps_only([32, 128]) + [(16, 10)]),
-    # Chebyshev acceleration of each substep's passes (solver.chebyshev, Wang 2015): iterations
-    # instead of substeps, at rho 0.9 and at 0.95, where some splits blow up (measured before the
-    # sweep: 20 x 4 with the levels). Plain xpbd's (10, 4) and (20, 4) above are its baseline.
-    'xpbd + levels, chebyshev 0.9': (['solver.levels=5', 'solver.chebyshev=0.9'],
-                                     {'variant': 'levels_chebyshev_0.9'},
-                                     [(10, 8), (15, 6), (20, 4), (30, 3)]),
-    'xpbd + levels, chebyshev 0.95': (['solver.levels=5', 'solver.chebyshev=0.95'],
-                                      {'variant': 'levels_chebyshev_0.95'},
-                                      [(10, 8), (20, 4), (30, 3)]),
-    'xpbd, chebyshev 0.9': (['solver.chebyshev=0.9'], {'variant': 'chebyshev_0.9'},
-                            [(10, 4), (20, 4), (20, 6), (40, 4)]),
 }
 
 
@@ -295,10 +288,6 @@ def swinging100_runs(quick):
                  substeps_only([96, 128])),
                 ('xpbd + levels, 2 threads', levels + ['solver.threads=2'],
                  substeps_only([60, 80, 96, 120])),
-                # Passes instead of substeps, accelerated (solver.chebyshev): on the chart as at
-                # 50 x 50, where it lost to the substeps (doc/performance.md).
-                ('xpbd + levels, chebyshev 0.9', levels + ['solver.chebyshev=0.9'],
-                 [(40, 3), (60, 2), (30, 4)]),
                 # Plain xpbd: with the top row held straight (solver.taut_chains) it meets target
                 # 2 without the levels, at fewer substeps than they need.
                 ('xpbd', [], substeps_only([80, 96, 104, 112, 120, 160, 320])),

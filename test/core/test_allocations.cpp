@@ -93,16 +93,6 @@ TEST(Allocations, SolverStepAllocatesNothingAfterWarmUp) {
   }
 }
 
-// solver.chebyshev keeps two positions per particle between passes: kept in buffers sized once.
-TEST(Allocations, ChebyshevPassesAllocateNothing) {
-  SceneConfig scene = test::clothScene(20, 20, 0.03, Method::kXpbd);
-  scene.cloth.pinned = {0, 19};
-  scene.solver.substeps = 2;
-  scene.solver.iterations = 5;
-  scene.solver.chebyshev = 0.9;
-  EXPECT_EQ(allocationsPerRun(scene, 10), 0);
-}
-
 // The whole step as the node runs it: self-collision, an obstacle and a bounds box too.
 TEST(Allocations, StepWithCollisionsAllocatesNothingAfterWarmUp) {
   for (Method method : {Method::kXpbd, Method::kVerlet}) {

@@ -81,19 +81,6 @@ struct SolverConfig {
   // after hierarchical PBD), each pass coarsest first. 0 = off (the default). Grid cloth and zero
   // stretch compliance only: the links are inextensible.
   int levels = 0;
-  // solver.levels_interpolate: HPBD's interpolation of each level's displacement to the finer
-  // particles. Off by default: it gains energy on the swinging cloth (measured;
-  // doc/performance.md).
-  bool levels_interpolate = false;
-  // solver.chebyshev: the spectral radius rho the Chebyshev semi-iterative method (Wang 2015,
-  // "A Chebyshev Semi-Iterative Approach for Accelerating Projective and Position-based Dynamics")
-  // assumes for a substep's passes: from the second pass on, each pass's result is extrapolated
-  // from the one two passes back by omega_k (Solver::accelerate). It needs solver.iterations >= 3
-  // (the last pass is never extrapolated); a gripper's reported force counts the passes' own
-  // corrections, not the extrapolation. 0 = off (the default): on the swinging cloth its passes
-  // cost what the substeps they save cost, and some splits blow up at rho 0.95
-  // (doc/performance.md, "Chebyshev acceleration").
-  double chebyshev = 0.0;
   // solver.max_speed (m/s): a free particle faster than this after a step means the step blew up
   // (its kinetic energy m v^2 / 2 per particle is out of bounds). Where fault recovery is on (the
   // node), that step is undone: Simulation::step, "Faults". Nothing a robot handles moves a cloth

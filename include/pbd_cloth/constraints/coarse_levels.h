@@ -12,11 +12,9 @@
 // sagging taut edge, a wave down a column) needs many passes; a link of level k removes the
 // stretch of 2^k cloth links in one projection.
 //
-// With `interpolate` (solver.levels_interpolate, HPBD proper), the particles of the finer level
-// that a level does not hold follow the displacement of their coarse cell (bilinear), and the
-// coarse links weigh their ends by the cloth they carry. On config/swinging.yaml this gains energy
-// above 20 substeps (doc/performance.md, "HPBD's interpolation"); without it the links move their
-// two ends only.
+// Each link moves its two ends only: HPBD's interpolation of a level's displacement to the finer
+// particles gained energy on config/swinging.yaml above 20 substeps and left the product
+// (doc/journal.md, "HPBD's interpolation").
 #pragma once
 
 #include <vector>
@@ -42,9 +40,8 @@ class CoarseLevels {
   // One sweep over the coarse levels, coarsest first, on the cloth particles (kinematic particles
   // do not move). Returns the largest correction of a coarse link (0 without track_change: only
   // solver.tolerance reads it). simd, avx512: solver.simd, solver.avx512.
-  double project(Particles& p, bool interpolate, bool simd = true, bool track_change = true,
-                 bool avx512 = true);
-  // The same sweep without interpolation, on the cloth's positions in columns (a step of links
+  double project(Particles& p, bool simd = true, bool track_change = true, bool avx512 = true);
+  // The same sweep on the cloth's positions in columns (a step of links
   // alone, Solver::linksAlone): the same operations, so the same result to the bit.
   double project(PositionColumns cloth, bool simd, bool track_change, bool avx512);
 
@@ -56,32 +53,18 @@ class CoarseLevels {
     int local_j = 0;
     double rest_length = 0.0;
   };
-  // A particle of the finer level that this level does not hold: its coarse cell's four corners
-  // (positions in this level's list of particles) and bilinear weights.
-  struct Interpolated {
-    int particle = 0;  // in the cloth
-    int corner[4] = {0, 0, 0, 0};
-    double weight[4] = {0.0, 0.0, 0.0, 0.0};
-  };
   struct Level {
     std::vector<int> particles;  // cloth indices, row by row
-    // The cloth particles each one carries, counted with their interpolation weights (HPBD's
-    // coarse mass): its own, plus its share of every finer particle that follows it. A coarse
-    // link weighs its ends by inverse_mass / carried, so the cloth it moves keeps its momentum.
-    std::vector<double> carried;
-    std::vector<Link> links;  // row by row
-    // The same links, flat and batched (no interpolation), between positions in `particles`,
+    std::vector<Link> links;     // row by row
+    // The same links, flat and batched, between positions in `particles`,
     // projected on a packed copy of those particles' positions and inverse masses.
     StretchLinks flat;
     ColumnPositions compact_position;  // the positions of `particles`, in columns
     std::vector<double> compact_inverse_mass;
-    std::vector<Interpolated> finer_only;  // the finer level's particles not on this level
   };
   // One level's links on its packed positions (level.compact_position, filled by the caller).
   static double projectPacked(Level& level, bool simd, bool track_change, bool avx512);
   std::vector<Level> levels_;  // levels_[0] = level 1 (the finest coarse level)
-  Vec3Array start_;            // cloth positions at the start of the cycle
-  Vec3Array displacement_;     // of a level's particles since the start of the cycle
   int rows_ = 0, cols_ = 0, requested_ = 0;
   double spacing_ = 0.0;
 };

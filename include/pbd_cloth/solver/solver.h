@@ -3,7 +3,7 @@
 // mass_spring_stepper.h); all buffers are allocated in prepare(), so a step allocates nothing.
 // Its units, in src/core/solver/: solver.cpp (configuration and the step's phases), integration
 // and prediction_kernels (predict, update velocities), projection_pass, stretch_projection,
-// bend_projection, column_layout (a step of links alone), thread_tasks, chebyshev, reactions.
+// bend_projection, column_layout (a step of links alone), thread_tasks, reactions.
 #pragma once
 
 #include <limits>
@@ -169,14 +169,6 @@ class Solver {
   MassSpringStepper mass_spring_;  // solver.method mass_spring: the explicit baseline
   std::vector<int> kinematic_particles_;  // the step's kinematic particles (startReactions)
   Vec3Array kinematic_velocity_;          // a kinematic particle's velocity kept across predict()
-  // solver.chebyshev: each particle's position before the current pass (q^k) and before the one
-  // before it (q^{k-1}) (Solver::accelerate). Empty while the option is off (48 bytes a particle
-  // otherwise); configure() and prepare() size them, never a step.
-  Vec3Array chebyshev_current_;
-  Vec3Array chebyshev_previous_;
-  void sizeChebyshevBuffers();
-  bool chebyshevKeeps(int pass) const;
-  double accelerate(int pass, double omega, Particles& p);
   // Reactions on kinematic particles: the stretch constraints and hinges with a kinematic and a
   // free particle (listed once per step), the sum of gradient times multiplier over the step
   // (kg m), the velocities at the step start, and the two forces of the last step.

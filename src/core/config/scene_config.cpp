@@ -198,9 +198,6 @@ void validateSolver(const SolverConfig& s) {
   checkNumber("solver.spring_damping", s.spring_damping, kNonNegative);
   checkNumber("solver.bend_spring_stiffness", s.bend_spring_stiffness, kNonNegative);
   checkInteger("solver.levels", s.levels, 0, 16);
-  // Chebyshev's omega_k = 4 / (4 - rho^2 omega_{k-1}) stays finite and tends to a limit in (1, 2)
-  // only for rho < 1 (Wang 2015); 0 turns it off.
-  checkNumber("solver.chebyshev", s.chebyshev, Range{0.0, 1.0, false, true});
   checkInteger("solver.threads", s.threads, 1, 64);
   checkInteger("solver.search_window", s.search_window, 0, kMaxPasses);
   checkNumber("solver.sleep_speed", s.sleep_speed, kNonNegative);

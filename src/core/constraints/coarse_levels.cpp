@@ -24,18 +24,6 @@ std::vector<int> coarsen(const std::vector<int>& lines) {
   return kept;
 }
 
-// The coarse interval [lines[a], lines[a + 1]] holding `line`, and the fraction of the way along.
-void locate(const std::vector<int>& lines, int line, int& a, double& fraction) {
-  if (lines.size() < 2) {
-    a = 0;
-    fraction = 0.0;
-    return;
-  }
-  a = static_cast<int>(std::upper_bound(lines.begin(), lines.end(), line) - lines.begin()) - 1;
-  a = std::max(0, std::min(a, static_cast<int>(lines.size()) - 2));
-  fraction = static_cast<double>(line - lines[a]) / (lines[a + 1] - lines[a]);
-}
-
 }  // namespace
 
 void CoarseLevels::build(int rows, int cols, double spacing, int levels) {
@@ -44,19 +32,10 @@ void CoarseLevels::build(int rows, int cols, double spacing, int levels) {
   cols_ = cols;
   spacing_ = spacing;
   requested_ = levels;
-  if (levels <= 0 || rows <= 0 || cols <= 0) {
-    start_.clear();
-    displacement_.clear();
-    return;
-  }
+  if (levels <= 0 || rows <= 0 || cols <= 0) return;
   std::vector<int> finer_rows(rows), finer_cols(cols);
   for (int r = 0; r < rows; ++r) finer_rows[r] = r;
   for (int c = 0; c < cols; ++c) finer_cols[c] = c;
-  std::size_t largest = 0;
-  // Local index of each cloth particle on the finer level, and what it carries (1 on the cloth).
-  std::vector<int> finer_local(static_cast<std::size_t>(rows) * cols);
-  for (std::size_t i = 0; i < finer_local.size(); ++i) finer_local[i] = static_cast<int>(i);
-  std::vector<double> finer_carried(finer_local.size(), 1.0);
   for (int k = 0; k < levels; ++k) {
     const std::vector<int> level_rows = coarsen(finer_rows), level_cols = coarsen(finer_cols);
     if (level_rows.size() == finer_rows.size() && level_cols.size() == finer_cols.size()) break;
@@ -67,7 +46,6 @@ void CoarseLevels::build(int rows, int cols, double spacing, int levels) {
     for (int a = 0; a < nr; ++a) {
       for (int b = 0; b < nc; ++b) {
         level.particles.push_back(cloth(a, b));
-        level.carried.push_back(finer_carried[finer_local[cloth(a, b)]]);
       }
     }
     auto add = [&](int a0, int b0, int a1, int b1) {
@@ -100,34 +78,6 @@ void CoarseLevels::build(int rows, int cols, double spacing, int levels) {
         }
       }
     }
-    // The finer level's particles this level does not hold, with their coarse cell.
-    for (int finer_r : finer_rows) {
-      for (int finer_c : finer_cols) {
-        const bool on_row = std::binary_search(level_rows.begin(), level_rows.end(), finer_r);
-        const bool on_col = std::binary_search(level_cols.begin(), level_cols.end(), finer_c);
-        if (on_row && on_col) continue;
-        Interpolated f;
-        f.particle = finer_r * cols + finer_c;
-        int a = 0, b = 0;
-        double fr = 0.0, fc = 0.0;
-        locate(level_rows, finer_r, a, fr);
-        locate(level_cols, finer_c, b, fc);
-        const int a1 = std::min(a + 1, nr - 1), b1 = std::min(b + 1, nc - 1);
-        f.corner[0] = local(a, b);
-        f.corner[1] = local(a, b1);
-        f.corner[2] = local(a1, b);
-        f.corner[3] = local(a1, b1);
-        f.weight[0] = (1.0 - fr) * (1.0 - fc);
-        f.weight[1] = (1.0 - fr) * fc;
-        f.weight[2] = fr * (1.0 - fc);
-        f.weight[3] = fr * fc;
-        for (int corner = 0; corner < 4; ++corner) {
-          level.carried[f.corner[corner]] +=
-              f.weight[corner] * finer_carried[finer_local[f.particle]];
-        }
-        level.finer_only.push_back(f);
-      }
-    }
     std::vector<DistanceConstraint> flat;
     flat.reserve(level.links.size());
     for (const Link& link : level.links) {
@@ -136,17 +86,10 @@ void CoarseLevels::build(int rows, int cols, double spacing, int levels) {
     level.flat.assign(flat, static_cast<int>(level.particles.size()));
     level.compact_position.resize(static_cast<int>(level.particles.size()));
     level.compact_inverse_mass.assign(level.particles.size(), 0.0);
-    largest = std::max(largest, level.particles.size());
-    finer_carried = level.carried;
-    for (std::size_t q = 0; q < level.particles.size(); ++q) {
-      finer_local[level.particles[q]] = static_cast<int>(q);
-    }
     levels_.push_back(std::move(level));
     finer_rows = level_rows;
     finer_cols = level_cols;
   }
-  start_.assign(static_cast<std::size_t>(rows) * cols, Vec3::Zero());
-  displacement_.assign(largest, Vec3::Zero());
 }
 
 void CoarseLevels::prepareStep(const Particles& p) {
@@ -192,68 +135,27 @@ double CoarseLevels::project(PositionColumns cloth, bool simd, bool track_change
   return max_change;
 }
 
-double CoarseLevels::project(Particles& p, bool interpolate, bool simd, bool track_change,
-                             bool avx512) {
+double CoarseLevels::project(Particles& p, bool simd, bool track_change, bool avx512) {
   if (levels_.empty()) return 0.0;
-  if (interpolate) {
-    for (int i : levels_.front().particles) start_[i] = p.position[i];
-  }
   double max_change = 0.0;
   for (int k = static_cast<int>(levels_.size()) - 1; k >= 0; --k) {
     Level& level = levels_[k];
-    if (!interpolate) {
-      // Each end moves itself: the cloth's own projection (stretch_links.h) with C = max(0, C),
-      // k = 1, no compliance and no multiplier, on a packed copy of the level's particles. The
-      // links touch no other particle, so the copy changes no operation (same result as in
-      // place) and lets the level's rows go four links to a register: in the cloth's array a
-      // level's particles lie 2^k apart, and scattered links go one at a time at twice the cost.
-      const int count = static_cast<int>(level.particles.size());
-      const PositionColumns packed = level.compact_position.columns();
-      for (int q = 0; q < count; ++q) {
-        const Vec3& x = p.position[level.particles[q]];
-        packed.x[q] = x[0];
-        packed.y[q] = x[1];
-        packed.z[q] = x[2];
-      }
-      max_change = std::max(max_change, projectPacked(level, simd, track_change, avx512));
-      for (int q = 0; q < count; ++q) {
-        p.position[level.particles[q]] = Vec3(packed.x[q], packed.y[q], packed.z[q]);
-      }
-      continue;
-    }
-    // Unilateral: a coarse link only pulls its ends together, never pushes them apart.
-    for (const Link& link : level.links) {
-      // Interpolated, an end moves the cloth it carries; alone, it moves itself.
-      const double wi = interpolate ? p.inverse_mass[link.i] / level.carried[link.local_i]
-                                    : p.inverse_mass[link.i];
-      const double wj = interpolate ? p.inverse_mass[link.j] / level.carried[link.local_j]
-                                    : p.inverse_mass[link.j];
-      const double w = wi + wj;
-      if (w < kMinInverseMass) continue;
-      const Vec3 delta = p.position[link.i] - p.position[link.j];
-      const double length = delta.norm();
-      if (!(length >= kMinLength)) continue;  // coincident (or not finite): no direction
-      // Slack links get a zero correction rather than a branch: whether a link is taut changes
-      // from link to link, and a mispredicted branch costs more than the arithmetic.
-      const double excess = std::max(0.0, length - link.rest_length);
-      const Vec3 correction = (excess / (w * length)) * delta;
-      p.position[link.i] -= wi * correction;
-      p.position[link.j] += wj * correction;
-      max_change = std::max(max_change, excess * std::max(wi, wj) / w);
-    }
-    if (!interpolate) continue;
+    // Each end moves itself: the cloth's own projection (stretch_links.h) with C = max(0, C),
+    // k = 1, no compliance and no multiplier, on a packed copy of the level's particles. The
+    // links touch no other particle, so the copy changes no operation (same result as in
+    // place) and lets the level's rows go four links to a register: in the cloth's array a
+    // level's particles lie 2^k apart, and scattered links go one at a time at twice the cost.
     const int count = static_cast<int>(level.particles.size());
+    const PositionColumns packed = level.compact_position.columns();
     for (int q = 0; q < count; ++q) {
-      const int i = level.particles[q];
-      displacement_[q] = p.position[i] - start_[i];
+      const Vec3& x = p.position[level.particles[q]];
+      packed.x[q] = x[0];
+      packed.y[q] = x[1];
+      packed.z[q] = x[2];
     }
-    // The finer level's other particles have not moved in this cycle yet: they follow their
-    // coarse cell, so the finer level starts from the coarse shape with its own detail kept.
-    for (const Interpolated& f : level.finer_only) {
-      if (p.inverse_mass[f.particle] == 0.0) continue;
-      p.position[f.particle] +=
-          f.weight[0] * displacement_[f.corner[0]] + f.weight[1] * displacement_[f.corner[1]] +
-          f.weight[2] * displacement_[f.corner[2]] + f.weight[3] * displacement_[f.corner[3]];
+    max_change = std::max(max_change, projectPacked(level, simd, track_change, avx512));
+    for (int q = 0; q < count; ++q) {
+      p.position[level.particles[q]] = Vec3(packed.x[q], packed.y[q], packed.z[q]);
     }
   }
   return max_change;

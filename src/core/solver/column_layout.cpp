@@ -4,7 +4,7 @@
 namespace pbd_cloth {
 
 // A step of links alone: nothing in a pass but the coarse levels and the flat links (no hinges,
-// tethers or Chebyshev, and collisions that touch no particle: a cloth swinging free), Gauss-
+// or tethers, and collisions that touch no particle: a cloth swinging free), Gauss-
 // Seidel. Its positions, velocities and substep starts then stay in columns for the whole step
 // (stateToColumns before the first prediction, stateFromColumns after the last update), where
 // otherwise every pass copies the positions into the columns and back around the sweep: 13.5 % of
@@ -13,9 +13,7 @@ bool Solver::linksAlone(const Particles& p, const ClothTopology& topology,
                         const Collisions& collisions) const {
   return config_.method != Method::kMassSpring && config_.ordering != Ordering::kJacobi &&
          fastStretch(topology) && link_positions_.size() == p.size() && bend_compliance_ < 0.0 &&
-         topology.tethers.empty() && config_.chebyshev == 0.0 &&
-         (coarse_.levelCount() == 0 || !config_.levels_interpolate) &&
-         collisions.touchesNoParticle(p, topology);
+         topology.tethers.empty() && collisions.touchesNoParticle(p, topology);
 }
 
 void Solver::stateToColumns(const Particles& p) {

@@ -21,16 +21,10 @@ void Solver::projectSubstep(double h, Particles& p, const ClothTopology& topolog
   }
   // The flat hinges' first pass writes theirs (projectFlatHinges, lambda_from_zero).
   if (!flatBend(topology)) std::fill(bend_lambda_.begin(), bend_lambda_.end(), Vec3::Zero());
-  double omega = 1.0;  // solver.chebyshev: the last extrapolation's weight in this substep
   for (int pass = 0; pass < config_.iterations; ++pass) {
     ++stats_.iterations;
-    if (chebyshevKeeps(pass)) {
-      std::swap(chebyshev_previous_, chebyshev_current_);  // no copy: the buffers trade places
-      chebyshev_current_ = p.position;                     // same size: no allocation
-    }
     const double max_change =
         projectPass(h, p, topology, collisions, pass == 0, pass + 1 == config_.iterations);
-    if (pass >= 1 && chebyshevKeeps(pass)) omega = accelerate(pass, omega, p);
     // Adaptive count (seed: "measuring the change from last iteration").
     if (tracksLargestChange() && max_change < config_.tolerance) break;
   }
@@ -46,10 +40,10 @@ double Solver::projectPass(double h, Particles& p, const ClothTopology& topology
   // compliant (they are inextensible); the explicit springs do not come here.
   double max_change = 0.0;
   if (coarse_.levelCount() > 0 && stretch_compliance_ == 0.0) {
-    max_change = in_columns_ ? coarse_.project(link_positions_.columns(), config_.simd,
-                                               tracksLargestChange(), config_.avx512)
-                             : coarse_.project(p, config_.levels_interpolate, config_.simd,
-                                               tracksLargestChange(), config_.avx512);
+    max_change = in_columns_
+                     ? coarse_.project(link_positions_.columns(), config_.simd,
+                                       tracksLargestChange(), config_.avx512)
+                     : coarse_.project(p, config_.simd, tracksLargestChange(), config_.avx512);
   }
   max_change = std::max(max_change, projectStretch(h, p, topology, first_pass));
   max_change = std::max(max_change, projectBend(h, p, topology, first_pass, last_pass));

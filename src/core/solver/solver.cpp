@@ -28,7 +28,6 @@ void Solver::configure(const SolverConfig& solver, const ClothConfig& cloth) {
       (coarse_.requested() != config_.levels || coarse_.spacing() != spacing_)) {
     coarse_.build(coarse_.rows(), coarse_.cols(), spacing_, config_.levels);
   }
-  sizeChebyshevBuffers();  // solver.chebyshev may have been switched on or off
 }
 
 void Solver::prepare(const Particles& particles, const ClothTopology& topology) {
@@ -47,7 +46,6 @@ void Solver::prepare(const Particles& particles, const ClothTopology& topology) 
   jacobi_delta_.assign(n, Vec3::Zero());
   jacobi_count_.assign(n, 0);
   mass_spring_.prepare(n);
-  sizeChebyshevBuffers();
   kinematic_velocity_.assign(n, Vec3::Zero());
   kinematic_particles_.clear();
   kinematic_particles_.reserve(n);
