@@ -171,7 +171,7 @@ TEST(Allocations, ScriptedGraspAndReleaseAllocateNothing) {
     scene.grippers = {gripper};
     Simulation sim(scene);
     for (int k = 0; k < 3; ++k) sim.step();
-    ASSERT_FALSE(sim.gripperGrasping(0));
+    ASSERT_FALSE(sim.grippers().grasping(0));
     int grasps = 0, releases = 0;
     std::size_t most_tethers = 0;
     bool holding = false;
@@ -180,7 +180,7 @@ TEST(Allocations, ScriptedGraspAndReleaseAllocateNothing) {
       g_counting = true;
       sim.step();
       g_counting = false;
-      if (sim.gripperGrasping(0) != holding) {
+      if (sim.grippers().grasping(0) != holding) {
         holding = !holding;
         ++(holding ? grasps : releases);
       }
@@ -212,7 +212,7 @@ TEST(Allocations, FaultRecoveryAllocatesNothing) {
     sim.step();
   }
   g_counting = false;
-  EXPECT_EQ(sim.restoredSteps(), 2u);
+  EXPECT_EQ(sim.faultGuard().restoredSteps(), 2u);
   EXPECT_EQ(g_allocations.load(), 0);
 }
 
