@@ -333,30 +333,7 @@ StepFault Simulation::findFault() const {
 }
 
 Metrics Simulation::computeMetrics() const {
-  Metrics metrics;
-  computeStrain(particles_, topology_, metrics.max_strain, metrics.mean_strain);
-  computeStructuralStrain(particles_, topology_, metrics.structural_max_strain,
-                          metrics.structural_mean_strain);
-  metrics.max_penetration = collisions_.maxPenetration(particles_, topology_);
-  metrics.finite = allFinite(particles_);
-  // A diverged state has no meaningful geometry to intersect.
-  metrics.self_intersections = metrics.finite ? countSelfIntersections(particles_, topology_) : -1;
-  const Vec3& g = scene_.solver.gravity;
-  for (int i = 0; i < particles_.size(); ++i) {
-    if (particles_.isKinematic(i)) continue;
-    metrics.kinetic_energy += 0.5 * particles_.mass[i] * particles_.velocity[i].squaredNorm();
-    metrics.potential_energy -= particles_.mass[i] * g.dot(particles_.position[i]);
-  }
-  if (scene_.solver.method == Method::kMassSpring) {
-    // Elastic energy of the explicit springs, so the baseline's energy is the full Hamiltonian.
-    for (const DistanceConstraint& con : topology_.stretch) {
-      const double stretch =
-          (particles_.position[con.i] - particles_.position[con.j]).norm() - con.rest_length;
-      metrics.potential_energy += 0.5 * scene_.solver.spring_stiffness * stretch * stretch;
-    }
-  }
-  metrics.energy = metrics.kinetic_energy + metrics.potential_energy;
-  return metrics;
+  return measureMetrics(particles_, topology_, collisions_, scene_.solver);
 }
 
 }  // namespace pbd_cloth
