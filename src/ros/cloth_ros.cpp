@@ -196,11 +196,11 @@ void ClothRos::loadRobotDescription(SceneConfig& scene) const {
 void ClothRos::createBodies() {
   ros::NodeHandle input_nh(nh_private_);
   input_nh.setCallbackQueue(&input_queue_);
-  const int grippers = sim_->gripperCount();
+  const int grippers = sim_->grippers().count();
   const int obstacles = sim_->obstacleCount();
   std::vector<int> links;
-  for (int l = 0; l < sim_->robotLinkCount(); ++l) {
-    if (sim_->robotLinkHasCollision(l)) links.push_back(l);
+  for (int l = 0; l < sim_->robotLinks().count(); ++l) {
+    if (sim_->robotLinks().hasCollision(l)) links.push_back(l);
   }
   bodies_.resize(grippers + obstacles + links.size());
   for (std::size_t k = 0; k < bodies_.size(); ++k) {
@@ -259,13 +259,13 @@ void ClothRos::createBodies() {
 Pose ClothRos::currentPose(const Body& body) const {
   switch (body.kind) {
     case BodyKind::kGripper:
-      return sim_->gripperPose(body.index);
+      return sim_->grippers().pose(body.index);
     case BodyKind::kObstacle:
       return sim_->obstacle(body.index).pose;
     case BodyKind::kRobotLink:
       break;
   }
-  return sim_->robotLinkPose(body.index);
+  return sim_->robotLinks().pose(body.index);
 }
 
 void ClothRos::poseCallback(Body& body, const geometry_msgs::PoseStamped& msg) {
@@ -493,7 +493,7 @@ void ClothRos::stepOnce() {
   pollTfFrames(inputTime());
   driveBodies(step_clock_.stateTime(sim_->time() + period).toSec());
   sim_->step();
-  if (sim_->lastStepRestored()) reportRestoredStep();
+  if (sim_->faultGuard().lastStepRestored()) reportRestoredStep();
   real_time_factor_.add(ros::WallTime::now().toSec(), sim_->time());
   if (!config_.publish_clock) {
     clock_factor_.add(ros::Time::now().toSec(), sim_->time());
@@ -522,12 +522,13 @@ void ClothRos::stepOnce() {
 // The step failed and Simulation undid it (fault recovery): the state is the one before it, at
 // rest, and the simulation goes on. The diagnostics report it as an error too.
 void ClothRos::reportRestoredStep() {
-  ROS_ERROR_THROTTLE(5.0,
-                     "A step failed (%s): it was undone, back to the last good state at rest, and "
-                     "the simulation goes on (%llu undone since start; ~state "
-                     "stats.restored_steps).",
-                     describe(sim_->lastFault(), sim_->scene().solver.max_speed).c_str(),
-                     static_cast<unsigned long long>(sim_->restoredSteps()));
+  ROS_ERROR_THROTTLE(
+      5.0,
+      "A step failed (%s): it was undone, back to the last good state at rest, and "
+      "the simulation goes on (%llu undone since start; ~state "
+      "stats.restored_steps).",
+      describe(sim_->faultGuard().lastFault(), sim_->scene().solver.max_speed).c_str(),
+      static_cast<unsigned long long>(sim_->faultGuard().restoredSteps()));
 }
 
 void ClothRos::injectFaultCallback(const std_msgs::String& msg) {
@@ -624,9 +625,9 @@ void ClothRos::diagnosticsCallback(const ros::WallTimerEvent& /*event*/) {
   health.degenerate_constraints = static_cast<int>(stats.degenerate_constraints);
   health.held_straight = static_cast<int>(sim_->tautChains().held().size());
   health.finite = allFinite(sim_->particles());
-  health.restored_steps = sim_->restoredSteps();
+  health.restored_steps = sim_->faultGuard().restoredSteps();
   if (health.restored_steps > 0) {
-    health.last_fault = describe(sim_->lastFault(), sim_->scene().solver.max_speed);
+    health.last_fault = describe(sim_->faultGuard().lastFault(), sim_->scene().solver.max_speed);
   }
   health.has_cameras = !cameras_->empty();
   health.camera_images = cameras_->framesPublished();
@@ -719,7 +720,8 @@ bool ClothRos::setStateCallback(SetState::Request& request, SetState::Response& 
   for (Body& body : bodies_) {
     body.follower.reset();
     body.last_stamp = ros::Time();
-    if (body.kind == BodyKind::kRobotLink) body.link_enabled = sim_->robotLinkEnabled(body.index);
+    if (body.kind == BodyKind::kRobotLink)
+      body.link_enabled = sim_->robotLinks().enabled(body.index);
   }
   real_time_factor_.clear();
   clock_factor_.clear();
@@ -748,7 +750,7 @@ void ClothRos::graspByNameCallback(const diagnostic_msgs::KeyValue& msg) {
   const int gripper = sim_->gripperIndex(msg.key);
   if (gripper < 0) {
     std::string names;
-    for (int g = 0; g < sim_->gripperCount(); ++g) {
+    for (int g = 0; g < sim_->grippers().count(); ++g) {
       names += (g > 0 ? ", " : "") + sim_->gripperName(g);
     }
     rejections_.reject(topic, RejectReason::kUnknownGripper,

@@ -110,7 +110,7 @@ void RosConversions::toStatsMessage(const Simulation& sim, SolverStats& msg) {
   msg.degenerate_constraints = static_cast<std::uint32_t>(stats.degenerate_constraints);
   msg.truncated_self_collision_searches =
       static_cast<std::uint32_t>(sim.collisions().stats().truncated_searches);
-  msg.restored_steps = static_cast<std::uint32_t>(sim.restoredSteps());
+  msg.restored_steps = static_cast<std::uint32_t>(sim.faultGuard().restoredSteps());
   msg.real_time_factor = 0.0;
   msg.rejected_inputs = 0;
 }
@@ -283,13 +283,13 @@ void RosConversions::toObstacleMarkers(const Simulation& sim, const std_msgs::He
 
 void RosConversions::toGripperMarkers(const Simulation& sim, const std_msgs::Header& header,
                                       visualization_msgs::MarkerArray& markers) {
-  for (int g = 0; g < sim.gripperCount(); ++g) {
+  for (int g = 0; g < sim.grippers().count(); ++g) {
     visualization_msgs::Marker marker;
     initMarker(header, "grippers", g, visualization_msgs::Marker::SPHERE, marker);
-    marker.pose = toPoseMessage(sim.gripperPose(g));
+    marker.pose = toPoseMessage(sim.grippers().pose(g));
     marker.scale.x = marker.scale.y = marker.scale.z = 2.0 * sim.scene().grippers[g].radius;
-    marker.color =
-        sim.gripperGrasping(g) ? color(0.2f, 0.8f, 0.2f, 0.5f) : color(0.95f, 0.85f, 0.2f, 0.5f);
+    marker.color = sim.grippers().grasping(g) ? color(0.2f, 0.8f, 0.2f, 0.5f)
+                                              : color(0.95f, 0.85f, 0.2f, 0.5f);
     markers.markers.push_back(marker);
   }
 }

@@ -315,7 +315,7 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
   long long asleep_steps = 0;
   using Clock = std::chrono::steady_clock;
   while (done < steps) {
-    const long slept_before = sim.sleptSteps();
+    const long slept_before = sim.sleeping().sleptSteps();
     const Clock::time_point begin = Clock::now();
     const std::clock_t cpu_begin = std::clock();
     sim.step();
@@ -323,7 +323,7 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
     const double seconds = std::chrono::duration<double>(Clock::now() - begin).count();
     step_seconds += seconds;
     // Sleeping (solver.sleep_speed): the steps it slept through and the others, timed apart.
-    if (sim.sleptSteps() > slept_before) {
+    if (sim.sleeping().sleptSteps() > slept_before) {
       asleep_seconds += seconds;
       ++asleep_steps;
     } else {

@@ -161,7 +161,7 @@ TEST(Allocations, ScriptedGraspAndReleaseAllocateNothing) {
     scene.grippers = {gripper};
     Simulation sim(scene);
     for (int k = 0; k < 3; ++k) sim.step();
-    ASSERT_FALSE(sim.gripperGrasping(0));
+    ASSERT_FALSE(sim.grippers().grasping(0));
     int grasps = 0, releases = 0;
     std::size_t most_tethers = 0;
     bool holding = false;
@@ -170,7 +170,7 @@ TEST(Allocations, ScriptedGraspAndReleaseAllocateNothing) {
       g_counting = true;
       sim.step();
       g_counting = false;
-      if (sim.gripperGrasping(0) != holding) {
+      if (sim.grippers().grasping(0) != holding) {
         holding = !holding;
         ++(holding ? grasps : releases);
       }
@@ -202,7 +202,7 @@ TEST(Allocations, FaultRecoveryAllocatesNothing) {
     sim.step();
   }
   g_counting = false;
-  EXPECT_EQ(sim.restoredSteps(), 2u);
+  EXPECT_EQ(sim.faultGuard().restoredSteps(), 2u);
   EXPECT_EQ(g_allocations.load(), 0);
 }
 

@@ -392,7 +392,7 @@ TEST(ClothMesh, ShippedTshirtComesToRestOnTheTable) {
     }
     std::printf("%d substeps: fastest particle over 2-2.5 s: %d at %.3g m/s\n", substeps,
                 fastest_particle, fastest);
-    EXPECT_FALSE(sim.asleep());
+    EXPECT_FALSE(sim.sleeping().asleep());
     EXPECT_LT(fastest, 0.1) << substeps << " substeps, particle " << fastest_particle;
     EXPECT_EQ(countSelfIntersections(sim.particles(), sim.topology()), 0);
   }
@@ -417,12 +417,12 @@ TEST(ClothMesh, ShippedTshirtFallsAsleepOnceStill) {
   std::vector<Vec3Array> history;  // positions after each step
   history.push_back(sim.particles().position);
   int steps = 0;
-  for (; steps < 150 && !sim.asleep(); ++steps) {
+  for (; steps < 150 && !sim.sleeping().asleep(); ++steps) {
     sim.step();
     history.push_back(sim.particles().position);
   }
-  std::printf("asleep: %d after %d steps\n", sim.asleep() ? 1 : 0, steps);
-  ASSERT_TRUE(sim.asleep()) << "the shirt did not fall asleep within 2.5 s";
+  std::printf("asleep: %d after %d steps\n", sim.sleeping().asleep() ? 1 : 0, steps);
+  ASSERT_TRUE(sim.sleeping().asleep()) << "the shirt did not fall asleep within 2.5 s";
   ASSERT_GE(steps, 2 * half_second);
   auto largestMove = [&](int from, int to) {
     double largest = 0.0;
@@ -441,7 +441,7 @@ TEST(ClothMesh, ShippedTshirtFallsAsleepOnceStill) {
   // And asleep it holds still: a second more moves nothing.
   const Vec3Array asleep_at = sim.particles().position;
   for (int k = 0; k < 2 * half_second; ++k) sim.step();
-  EXPECT_TRUE(sim.asleep());
+  EXPECT_TRUE(sim.sleeping().asleep());
   EXPECT_EQ(sim.particles().position, asleep_at);
 }
 

@@ -32,11 +32,11 @@ void expectStepUndone(Simulation& sim, InjectedFault injected, StepFault::Kind e
   sim.step();
 
   EXPECT_TRUE(allFinite(sim.particles()));
-  EXPECT_TRUE(sim.lastStepRestored());
-  EXPECT_EQ(sim.restoredSteps(), 1u);
-  EXPECT_EQ(sim.lastFault().kind, expected);
-  EXPECT_GE(sim.lastFault().particle, 0);
-  EXPECT_NEAR(sim.lastFault().time, sim.time(), 1e-12);
+  EXPECT_TRUE(sim.faultGuard().lastStepRestored());
+  EXPECT_EQ(sim.faultGuard().restoredSteps(), 1u);
+  EXPECT_EQ(sim.faultGuard().lastFault().kind, expected);
+  EXPECT_GE(sim.faultGuard().lastFault().particle, 0);
+  EXPECT_NEAR(sim.faultGuard().lastFault().time, sim.time(), 1e-12);
   // Time goes on; every particle is where the step started (the pins never moved), at rest.
   EXPECT_NEAR(sim.time(), time_before + 1.0 / sim.scene().step_rate, 1e-12);
   for (int i = 0; i < sim.particles().size(); ++i) {
@@ -47,8 +47,8 @@ void expectStepUndone(Simulation& sim, InjectedFault injected, StepFault::Kind e
   // The simulation goes on from there: it swings again, finite, with no further fault.
   for (int k = 0; k < 30; ++k) sim.step();
   EXPECT_TRUE(allFinite(sim.particles()));
-  EXPECT_EQ(sim.restoredSteps(), 1u);
-  EXPECT_FALSE(sim.lastStepRestored());
+  EXPECT_EQ(sim.faultGuard().restoredSteps(), 1u);
+  EXPECT_FALSE(sim.faultGuard().lastStepRestored());
   const int corner = sim.particles().size() - 1;  // free, and it swings (the top row is held)
   EXPECT_GT((sim.particles().position[corner] - before[corner]).norm(), 1e-3)
       << "the cloth did not move on after the recovery";
@@ -65,18 +65,18 @@ TEST(FaultRecovery, EnergyBlowUpInsideTheStepIsUndone) {
   Simulation sim(swingingCloth());
   sim.setFaultRecovery(true);
   expectStepUndone(sim, InjectedFault::kBlowUp, StepFault::Kind::kTooFast);
-  EXPECT_GT(sim.lastFault().speed, sim.scene().solver.max_speed);
+  EXPECT_GT(sim.faultGuard().lastFault().speed, sim.scene().solver.max_speed);
 }
 
 // Off (the default: benchmarks and stability tests must see a method fail), the fault stays.
 TEST(FaultRecovery, OffLeavesTheFailedStepAsItIs) {
   Simulation sim(swingingCloth());
-  EXPECT_FALSE(sim.faultRecovery());
+  EXPECT_FALSE(sim.faultGuard().enabled());
   for (int k = 0; k < 5; ++k) sim.step();
   sim.injectFaultForTesting(InjectedFault::kNaN);
   sim.step();
   EXPECT_FALSE(allFinite(sim.particles()));
-  EXPECT_EQ(sim.restoredSteps(), 0u);
+  EXPECT_EQ(sim.faultGuard().restoredSteps(), 0u);
 }
 
 // A real blow-up, no injection: explicit springs far too stiff for one substep (the stability
@@ -103,7 +103,7 @@ TEST(FaultRecovery, UnstableSpringsNeverPublishABlowUp) {
     sim.step();
     ASSERT_EQ(sim.findFault().kind, StepFault::Kind::kNone) << "step " << k;
   }
-  EXPECT_GT(sim.restoredSteps(), 0u);
+  EXPECT_GT(sim.faultGuard().restoredSteps(), 0u);
 }
 
 // The message a node logs names the particle and the limit.

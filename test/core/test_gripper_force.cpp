@@ -95,7 +95,7 @@ TEST(GripperForce, AcceleratingUpwardsTakesMoreThanHoldingStill) {
     for (int k = 0; k < 720; ++k) sim.step();
     const double rest = meanForce(sim, 30).norm();
     const double accel = 2.0, dt = 1.0 / sim.scene().step_rate;
-    const Vec3 start = sim.gripperPose(0).position;
+    const Vec3 start = sim.grippers().pose(0).position;
     Vec3 lifting = Vec3::Zero();
     double mean_speed = 0.0;
     const int steps = 30, counted = steps - steps / 2;

@@ -223,7 +223,7 @@ TEST(Methods, GraspedParticlesFollowGripperSmoothlyAcrossSubsteps) {
   for (int k = 0; k < 80; ++k) {
     const Vec3 before = p.position[0];
     sim.step();
-    ASSERT_TRUE(sim.gripperGrasping(0));
+    ASSERT_TRUE(sim.grippers().grasping(0));
     ASSERT_TRUE(p.isKinematic(0) && p.isKinematic(1));
     const double t = std::min(1.0, sim.time());
     const Eigen::Quaterniond q = start.pose.orientation.slerp(t, end.pose.orientation);
@@ -248,7 +248,7 @@ TEST(Methods, GraspedParticlesFollowGripperSmoothlyAcrossSubsteps) {
 
   // Held after the last waypoint; released at 1.5 s with the gripper's (zero) velocity.
   while (sim.time() < 1.5 + 0.5 * dt) sim.step();
-  EXPECT_FALSE(sim.gripperGrasping(0));
+  EXPECT_FALSE(sim.grippers().grasping(0));
   EXPECT_FALSE(p.isKinematic(0));
   for (int k = 0; k < 10; ++k) sim.step();
   EXPECT_LT(p.position[0].z(), end.pose.position.z() - 0.01);  // free again: it falls
@@ -280,11 +280,11 @@ TEST(Methods, ReleasedParticlesKeepTheirVelocityIncludingTheGrippersRotation) {
     scene.grippers = {gripper};
     Simulation sim(scene);
     while (sim.time() < 1.0 - 0.5 * dt) sim.step();
-    ASSERT_TRUE(sim.gripperGrasping(0)) << toString(method);
+    ASSERT_TRUE(sim.grippers().grasping(0)) << toString(method);
     ASSERT_EQ(sim.setGrasp(0, false).grasped_count, 4) << toString(method);
 
     const Particles& p = sim.particles();
-    const Vec3 centre = sim.gripperPose(0).position;
+    const Vec3 centre = sim.grippers().pose(0).position;
     const Vec3 spin = omega * Vec3::UnitZ();
     for (int i = 0; i < 4; ++i) {
       const Vec3 r = p.position[i] - centre;

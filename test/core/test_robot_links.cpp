@@ -82,15 +82,15 @@ TEST(RobotLinks, EveryElementOfAMovingLinkPushesTheCloth) {
   SceneConfig scene = curtainScene(10);
   scene.robot.joint_trajectory = {{0.0, {{"slide", -0.3}}}, {0.3, {{"slide", 0.3}}}};
   Simulation sim(scene);
-  ASSERT_EQ(sim.robotLinkCount(), 2);
-  EXPECT_FALSE(sim.robotLinkHasCollision(0));
-  EXPECT_TRUE(sim.robotLinkHasCollision(1));
+  ASSERT_EQ(sim.robotLinks().count(), 2);
+  EXPECT_FALSE(sim.robotLinks().hasCollision(0));
+  EXPECT_TRUE(sim.robotLinks().hasCollision(1));
   double worst = 0.0;
   for (int k = 0; k < 36; ++k) {
     sim.step();
     worst = std::max(worst, sim.stats().max_penetration);
   }
-  EXPECT_NEAR(sim.robotLinkPose(1).position.y(), 0.3, 1e-12);
+  EXPECT_NEAR(sim.robotLinks().pose(1).position.y(), 0.3, 1e-12);
   std::printf("[ measured ] paddle of 4 elements at 2 m/s: max penetration %.3g m\n", worst);
   EXPECT_LT(worst, scene.cloth.thickness);
   // Each element carries cloth: a particle in contact with it (within 1 mm of its surface).

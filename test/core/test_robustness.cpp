@@ -311,8 +311,8 @@ TEST(Robustness, ImpossibleLivePosesAreRefusedAndTheStateStaysFinite) {
   EXPECT_TRUE(sim.setGripperPose(0, good));
   EXPECT_TRUE(sim.setObstaclePose(0, good));
   sim.step();
-  EXPECT_NEAR(sim.gripperPose(0).position.x(), 0.1, 1e-12);
-  EXPECT_NEAR(sim.gripperPose(0).orientation.norm(), 1.0, 1e-12);
+  EXPECT_NEAR(sim.grippers().pose(0).position.x(), 0.1, 1e-12);
+  EXPECT_NEAR(sim.grippers().pose(0).orientation.norm(), 1.0, 1e-12);
 }
 
 }  // namespace

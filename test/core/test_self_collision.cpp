@@ -71,7 +71,7 @@ TEST_P(FoldWithSearchWindow, NeverIntersects) {
   SceneConfig scene = foldScene(true);
   scene.solver.search_window = GetParam();
   Simulation sim(scene);
-  ASSERT_EQ(sim.gripperCount(), 2);
+  ASSERT_EQ(sim.grippers().count(), 2);
   int worst = 0, worst_step = -1, truncated = 0;
   double deepest = 0.0;
   for (int k = 0; k < 240; ++k) {
@@ -243,8 +243,8 @@ TEST(SelfCollision, CrushedClothStopsEachSearchAtItsBudget) {
     truncated += stats.truncated_searches;
     EXPECT_LE(stats.edge_edge_pairs, budget + 144) << "step " << k;
     EXPECT_LE(stats.vertex_triangle_pairs, budget + 96) << "step " << k;
-    EXPECT_FALSE(sim.lastStepRestored())
-        << "step " << k << ": " << describe(sim.lastFault(), scene.solver.max_speed);
+    EXPECT_FALSE(sim.faultGuard().lastStepRestored())
+        << "step " << k << ": " << describe(sim.faultGuard().lastFault(), scene.solver.max_speed);
     for (const Vec3& v : sim.particles().velocity) fastest = std::max(fastest, v.norm());
   }
   std::printf("crushed 10 x 10: %d truncated searches, fastest particle %.1f m/s\n", truncated,

@@ -163,7 +163,7 @@ TEST(SimState, DrapeWithLiveGripperAndMovingObstacleContinuesBitForBit) {
     Pose pose;
     pose.position = Vec3(0.1 * std::sin(0.05 * k), 0.0, 0.5);
     sim.setObstaclePose(ball, pose);
-    Pose grip = sim.gripperPose(0);
+    Pose grip = sim.grippers().pose(0);
     if (k == 19) grip.position = sim.particles().position[0];
     if (k > 20) grip.position.z() += 0.004;
     if (k >= 19) sim.setGripperPose(0, grip);

@@ -42,19 +42,19 @@ SceneConfig towelScene() {
 
 // Steps until the scene sleeps (at most 5 s); fails the test if it never does.
 void stepUntilAsleep(Simulation& sim) {
-  for (int step = 0; step < 300 && !sim.asleep(); ++step) sim.step();
-  ASSERT_TRUE(sim.asleep()) << "the towel did not fall asleep within 5 s";
+  for (int step = 0; step < 300 && !sim.sleeping().asleep(); ++step) sim.step();
+  ASSERT_TRUE(sim.sleeping().asleep()) << "the towel did not fall asleep within 5 s";
 }
 
 TEST(Sleeping, ATowelAtRestSleepsAndHoldsStill) {
   Simulation sim(towelScene());
   stepUntilAsleep(sim);
   const Vec3Array rest = sim.particles().position;
-  const double slept_before = sim.sleptSteps();
+  const double slept_before = sim.sleeping().sleptSteps();
   const double t0 = sim.time();
   for (int step = 0; step < 60; ++step) sim.step();
-  EXPECT_TRUE(sim.asleep());
-  EXPECT_EQ(sim.sleptSteps() - slept_before, 60);
+  EXPECT_TRUE(sim.sleeping().asleep());
+  EXPECT_EQ(sim.sleeping().sleptSteps() - slept_before, 60);
   EXPECT_NEAR(sim.time() - t0, 1.0, 1e-9);  // time goes on
   EXPECT_EQ(sim.particles().position, rest);
   EXPECT_EQ(sim.stats().iterations, 0);  // no solve in a slept step
@@ -67,8 +67,8 @@ TEST(Sleeping, OffByDefault) {
   scene.solver.sleep_speed = 0.0;
   Simulation sim(scene);
   for (int step = 0; step < 180; ++step) sim.step();
-  EXPECT_FALSE(sim.asleep());
-  EXPECT_EQ(sim.sleptSteps(), 0);
+  EXPECT_FALSE(sim.sleeping().asleep());
+  EXPECT_EQ(sim.sleeping().sleptSteps(), 0);
 }
 
 // A grasp wakes it, and the held towel follows the gripper up.
@@ -78,13 +78,13 @@ TEST(Sleeping, AGraspWakesItAndTheTowelFollowsTheGripper) {
   sim.setGripperPose(0, above);
   stepUntilAsleep(sim);
   ASSERT_TRUE(sim.setGrasp(0, true).success);
-  EXPECT_FALSE(sim.asleep());
+  EXPECT_FALSE(sim.sleeping().asleep());
   for (int step = 0; step < 30; ++step) {
     above.position.z() += 0.01;
     sim.setGripperPose(0, above);
     sim.step();
   }
-  EXPECT_FALSE(sim.asleep());
+  EXPECT_FALSE(sim.sleeping().asleep());
   double highest = 0.0;
   for (const Vec3& x : sim.particles().position) highest = std::max(highest, x.z());
   EXPECT_GT(highest, 1.05);
@@ -101,7 +101,7 @@ TEST(Sleeping, AMovingGripperThatHoldsItWakesIt) {
   above.position.x() += 0.05;
   sim.setGripperPose(0, above);
   sim.step();
-  EXPECT_FALSE(sim.asleep());
+  EXPECT_FALSE(sim.sleeping().asleep());
   EXPECT_EQ(sim.stats().iterations, 10);
 }
 
@@ -112,17 +112,17 @@ TEST(Sleeping, ACollidingBallWakesItAFarOneDoesNot) {
   stepUntilAsleep(sim);
   sim.setObstaclePose(1, test::makePose(Vec3(3.0, 1.0, 1.0)));  // 3 m away
   sim.step();
-  EXPECT_TRUE(sim.asleep());
+  EXPECT_TRUE(sim.sleeping().asleep());
   const Vec3Array rest = sim.particles().position;
   // Down onto the towel's middle: 0.1 m ball from 1.0 m to 0.85 m over a few steps, then below.
   for (double z : {0.95, 0.9, 0.87}) {
     sim.setObstaclePose(1, test::makePose(Vec3(0.0, 0.0, z)));
     sim.step();
   }
-  EXPECT_FALSE(sim.asleep());
+  EXPECT_FALSE(sim.sleeping().asleep());
   sim.setObstaclePose(1, test::makePose(Vec3(0.0, 0.0, 0.84)));
   sim.step();
-  EXPECT_FALSE(sim.asleep());
+  EXPECT_FALSE(sim.sleeping().asleep());
   EXPECT_NE(sim.particles().position, rest);
 }
 
@@ -135,12 +135,12 @@ TEST(Sleeping, AFloorMovingFarBelowLeavesItAsleepOneRisingIntoItWakesIt) {
   stepUntilAsleep(sim);
   sim.setObstaclePose(2, test::makePose(Vec3(0.0, 0.0, 0.3)));  // still 0.5 m below
   sim.step();
-  EXPECT_TRUE(sim.asleep());
+  EXPECT_TRUE(sim.sleeping().asleep());
   for (double z : {0.6, 0.79, 0.82, 0.85}) {
     sim.setObstaclePose(2, test::makePose(Vec3(0.0, 0.0, z)));
     sim.step();
   }
-  EXPECT_FALSE(sim.asleep());
+  EXPECT_FALSE(sim.sleeping().asleep());
   for (const Vec3& x : sim.particles().position) EXPECT_GE(x.z(), 0.85 + 0.005 - 1e-6);
 }
 
@@ -152,7 +152,7 @@ TEST(Sleeping, ChangedSolverParametersWakeIt) {
   // A tilted world, steeper than the friction cone (mu_s 0.5): the towel slides.
   solver.gravity = Vec3(8.0, 0.0, -9.81);
   sim.setSolverConfig(solver);
-  EXPECT_FALSE(sim.asleep());
+  EXPECT_FALSE(sim.sleeping().asleep());
   const Vec3 corner = sim.particles().position[0];
   for (int step = 0; step < 30; ++step) sim.step();
   EXPECT_GT(sim.particles().position[0].x() - corner.x(), 0.01);

@@ -145,7 +145,7 @@ TEST(TautChains, TurnedOffLiveLeavesAGraspAlone) {
   sim.step();
   EXPECT_TRUE(sim.tautChains().held().empty());
   EXPECT_TRUE(sim.particles().isKinematic(5));
-  EXPECT_TRUE(sim.gripperGrasping(0));
+  EXPECT_TRUE(sim.grippers().grasping(0));
 }
 
 // Links that can stretch have more than one shape between the same ends: a compliant cloth, pbd

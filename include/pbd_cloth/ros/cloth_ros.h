@@ -153,7 +153,7 @@ class ClothRos {
     ros::Time last_stamp;      // of the last accepted pose (message or tf)
     bool tf_seen = false;      // tf_frame was found at least once
     bool tf_ok = false;        // the last poll of tf_frame succeeded
-    bool link_enabled = true;  // robot links: collides (mirrors Simulation::robotLinkEnabled)
+    bool link_enabled = true;  // robot links: collides (mirrors RobotLinks::enabled)
     ros::Subscriber pose_subscriber;
     ros::ServiceServer grasp_service;  // grippers only
     ros::Publisher wrench_publisher;   // grippers only

@@ -5,6 +5,9 @@
 
 namespace pbd_cloth {
 
+class Collisions;
+struct SolverConfig;
+
 struct Metrics {
   double max_strain = 0.0;   // max |l - l0| / l0 over stretch constraints
   double mean_strain = 0.0;  // mean |l - l0| / l0 over stretch constraints
@@ -34,5 +37,11 @@ void computeStructuralStrain(const Particles& particles, const ClothTopology& to
 int countSelfIntersections(const Particles& particles, const ClothTopology& topology);
 
 bool allFinite(const Particles& particles);
+
+// Every metric of a state: the strains, the deepest contact violation (collisions), whether it is
+// finite, its self-intersections, and its energy under the solver's gravity (with the springs'
+// elastic energy for solver.method mass_spring). Simulation::computeMetrics on its own state.
+Metrics measureMetrics(const Particles& particles, const ClothTopology& topology,
+                       const Collisions& collisions, const SolverConfig& solver);
 
 }  // namespace pbd_cloth

@@ -12,33 +12,16 @@
 #include "pbd_cloth/constraints/taut_chains.h"
 #include "pbd_cloth/constraints/tethers.h"
 #include "pbd_cloth/model/particles.h"
+#include "pbd_cloth/sim/fault_guard.h"
+#include "pbd_cloth/sim/grippers.h"
+#include "pbd_cloth/sim/live_pose.h"
 #include "pbd_cloth/sim/metrics.h"
+#include "pbd_cloth/sim/robot_links.h"
+#include "pbd_cloth/sim/sleeping.h"
 #include "pbd_cloth/solver/solver.h"
 #include "pbd_cloth/state/saved_state.h"
 
 namespace pbd_cloth {
-
-// A step whose result could not stand (Simulation::step, fault recovery).
-struct StepFault {
-  enum class Kind {
-    kNone,
-    kNonFinite,  // a particle's position or velocity is NaN or Inf
-    kTooFast,    // a free particle moves faster than solver.max_speed: an energy blow-up
-  };
-  Kind kind = Kind::kNone;
-  int particle = -1;   // the first particle found at fault
-  double speed = 0.0;  // its speed (m/s), kTooFast
-  double time = 0.0;   // simulated time at the end of the step that was undone (s)
-};
-
-// "particle 12 not finite" / "particle 12 at 1.3e+04 m/s (solver.max_speed 100 m/s)".
-std::string describe(const StepFault& fault, double max_speed);
-
-// Faults a test can inject inside the next step (Simulation::injectFaultForTesting).
-enum class InjectedFault {
-  kNaN,     // the first free particle's position becomes NaN before the constraints are solved
-  kBlowUp,  // after they are, the first free particle gets 1000 x solver.max_speed more speed
-};
 
 struct GraspResult {
   bool success = false;
@@ -80,17 +63,17 @@ class Simulation {
   // Indices of the particles that are pinned or grasped right now, written into `out`.
   void kinematicIndices(std::vector<unsigned>& out) const;
 
-  // Grippers. Index -1 means "no such gripper".
+  // Grippers. Index -1 means "no such gripper". Their poses and holds: grippers() (count(),
+  // pose(g), grasping(g)); they move and grasp through the calls below, which keep the rest of
+  // the scene (tethers, sleep) in step with them.
+  const Grippers& grippers() const { return grippers_; }
   int gripperIndex(const std::string& name) const;
-  int gripperCount() const { return static_cast<int>(grippers_.size()); }
   const std::string& gripperName(int gripper) const;
   // solver.taut_chains: the particles held straight in the last step, and the ends holding them.
   const TautChains& tautChains() const { return taut_chains_; }
   // The pose the gripper reaches at the end of the next step. A live pose stops its trajectory.
   // A pose with a poseProblem() is refused (false) and the gripper keeps its course.
-  bool setGripperPose(int gripper, const Pose& pose);
-  const Pose& gripperPose(int gripper) const;
-  bool gripperGrasping(int gripper) const;
+  bool setGripperPose(int gripper, const Pose& pose) { return grippers_.setPose(gripper, pose); }
   GraspResult setGrasp(int gripper, bool grasp);
   // Force (N) the held particles exerted on the gripper over the last step (impulse / dt): every
   // constraint and contact acting on them (stretch, bending, tethers, particle and self-contacts;
@@ -112,19 +95,19 @@ class Simulation {
   // Robot links (scene.robot.model.links; index -1 means "no such link"). Only links with collision
   // elements collide. Without live poses the links follow robot.joint_trajectory by forward
   // kinematics (robot.pose places the root); a live pose takes that link off the trajectory.
-  int robotLinkCount() const;
+  // Their poses now (end of the last step) and whether they collide: robotLinks() (count(),
+  // pose(l), hasCollision(l), enabled(l)).
+  const RobotLinks& robotLinks() const { return links_; }
   int robotLinkIndex(const std::string& name) const;
   const std::string& robotLinkName(int link) const;
-  bool robotLinkHasCollision(int link) const;
   // The pose the link reaches at the end of the next step (moved as a kinematic body, swept
   // continuously). A pose with a poseProblem() is refused (false).
-  bool setRobotLinkPose(int link, const Pose& pose);
-  // The link's pose now (end of the last step).
-  const Pose& robotLinkPose(int link) const;
+  bool setRobotLinkPose(int link, const Pose& pose) { return links_.setPose(link, pose); }
   // A disabled link does not collide (the node disables a link whose tf is missing). When it is
   // enabled again it is placed at the next pose given, without sweeping the way in between.
-  void setRobotLinkEnabled(int link, bool enabled);
-  bool robotLinkEnabled(int link) const;
+  void setRobotLinkEnabled(int link, bool enabled) {
+    links_.setEnabled(link, enabled, collisions_);
+  }
 
   // Live tuning: applied at the next step. Throws ConfigError on an invalid value.
   void setSolverConfig(const SolverConfig& solver);
@@ -156,31 +139,28 @@ class Simulation {
   // The step is then undone: every free particle goes back to its position at the start of the
   // step, at rest (the momentum that blew up is not replayed), kinematic particles stay where
   // their grippers put them, and time goes on. Off, a failed step stays as it is: the benchmarks
-  // and stability tests must see a method diverge.
-  void setFaultRecovery(bool on) { fault_recovery_ = on; }
-  // Between steps (never inside one): buffers an extreme step grew beyond what build() reserved
-  // go back to that reserve, contents kept, so a long-running node does not keep the peak of
-  // every extreme for good. The results do not change. Returns the bytes released.
-  std::size_t releaseExcessCapacity() { return collisions_.releaseExcessCapacity(); }
-  bool faultRecovery() const { return fault_recovery_; }
-  // Steps undone since construction (reset does not clear it), whether the last one was, and the
-  // fault of the latest undone step.
-  std::uint64_t restoredSteps() const { return restored_steps_; }
-  bool lastStepRestored() const { return last_step_restored_; }
-  // Sleeping (solver.sleep_speed): whether the scene sleeps now, and the steps it slept through
-  // since it was built (each cost a check, not a solve).
-  bool asleep() const { return asleep_; }
-  long sleptSteps() const { return slept_steps_; }
-  // Wakes a sleeping scene: anything from outside that could move it calls this (grasp, state,
-  // reset, solver or cloth parameters); the step's own checks catch moving pins, grippers and
-  // colliders.
-  void wake();
-  const StepFault& lastFault() const { return last_fault_; }
+  // and stability tests must see a method diverge. What it undid: faultGuard() (restoredSteps(),
+  // reset does not clear it; lastStepRestored(); lastFault(), of the latest undone step).
+  void setFaultRecovery(bool on) { fault_guard_.setEnabled(on); }
+  const FaultGuard& faultGuard() const { return fault_guard_; }
   // The check itself, on the current state (kNone: the state can stand).
   StepFault findFault() const;
   // Test hook: corrupts the next step from inside (InjectedFault says where), so a test can see
   // the recovery catch it.
-  void injectFaultForTesting(InjectedFault fault) { injected_fault_ = fault, inject_ = true; }
+  void injectFaultForTesting(InjectedFault fault) { fault_guard_.inject(fault); }
+
+  // Sleeping (solver.sleep_speed, sleeping.h): whether the scene sleeps now, and the steps it
+  // slept through since it was built: sleeping() (asleep(), sleptSteps()).
+  const Sleeping& sleeping() const { return sleeping_; }
+  // Wakes a sleeping scene: anything from outside that could move it calls this (grasp, state,
+  // reset, solver or cloth parameters); the step's own checks catch moving pins, grippers and
+  // colliders.
+  void wake() { sleeping_.wake(); }
+
+  // Between steps (never inside one): buffers an extreme step grew beyond what build() reserved
+  // go back to that reserve, contents kept, so a long-running node does not keep the peak of
+  // every extreme for good. The results do not change. Returns the bytes released.
+  std::size_t releaseExcessCapacity() { return collisions_.releaseExcessCapacity(); }
 
  private:
   // stats(): the measures of the current state, whether they are still current (a step, a
@@ -194,45 +174,15 @@ class Simulation {
   mutable StateMeasures measures_;
   mutable bool state_measured_ = false;
   mutable StepStats reported_stats_;
-  struct GripperState {
-    Pose pose;          // pose at the end of the last step
-    Pose target;        // pose at the end of the next step
-    bool live = false;  // a pose message arrived: the trajectory is no longer followed
-    bool grasping = false;
-    std::vector<int> grasped;                    // particle indices
-    std::vector<Eigen::Vector3d> local_offsets;  // grasped particle positions in the gripper frame
-    // Linear velocity over the last step (reported in the state; released particles keep their
-    // own velocity, which includes the gripper's rotation: releaseGrasp).
-    Eigen::Vector3d velocity = Eigen::Vector3d::Zero();
-    std::size_t next_waypoint = 0;  // first waypoint whose grasp event is pending
-  };
-
-  // A robot link: its colliders [first_collider, first_collider + collider_count) in collisions_.
-  struct RobotLinkState {
-    int first_collider = 0;
-    int collider_count = 0;
-    Pose pose;          // at the end of the last step
-    Pose target;        // at the end of the next step
-    bool live = false;  // a pose was given: robot.joint_trajectory no longer poses it
-    bool enabled = true;
-  };
-
   void build();
-  void buildRobot();
-  void followJointTrajectory(double t);
-  void moveRobotColliders();
+  void moveKinematicBodies(double dt);
   void followTrajectories(double t_end);
   void updateKinematicTargets(double dt);
   int changeGrasp(int gripper, bool grasp);
-  void releaseGrasp(GripperState& gripper);
   void kinematicSetChanged();
-  void undoStep(const StepFault& fault);
   void findStartWarnings();
-  bool canSleepThrough() const;
   void stepAwake(double dt, bool targets_set);
   void stepHeld(double dt);
-  void updateSleep(double dt);
-  void injectFault(double dt);
   // setState's check: empty when the state fits this scene, else what does not.
   std::string checkState(const SimulationState& state) const;
 
@@ -251,46 +201,13 @@ class Simulation {
   std::vector<int> anchor_holder_;
   Solver solver_;
   Collisions collisions_;
-  std::vector<GripperState> grippers_;
-  std::vector<RobotLinkState> links_;  // one per scene_.robot.model.links
-  // robot.joint_trajectory with every joint's position at every waypoint (a joint a waypoint does
-  // not name keeps its previous value; 0 before the first), and scratch space for the step.
-  std::vector<std::vector<double>> joint_waypoints_;
-  std::vector<double> joint_positions_;
-  std::vector<Pose> link_poses_;
+  Grippers grippers_;
+  RobotLinks links_;  // one per scene_.robot.model.links
   double time_ = 0.0;
-  // Fault recovery: the free particles' positions at the start of the step (sized in build(),
-  // so the copy each step allocates nothing).
   std::vector<std::string> start_warnings_;
-  bool fault_recovery_ = false;
-  Vec3Array good_position_;
-  std::uint64_t restored_steps_ = 0;
-  bool last_step_restored_ = false;
-  // Sleeping: how long every free particle has stayed within sleep_speed x sleep_time of where it
-  // was when the stillness began (still_from_, sized in build()), whether the scene sleeps, the
-  // particles' bounds when it fell asleep, and the collider change count then.
-  double still_time_ = 0.0;
-  bool still_begun_ = false;
-  Vec3Array still_from_;
-  bool asleep_ = false;
-  long slept_steps_ = 0;
-  Vec3 sleep_lo_ = Vec3::Zero();
-  Vec3 sleep_hi_ = Vec3::Zero();
-  double sleep_margin_ = 0.0;  // m around those bounds where a moving collider wakes the scene
-  long sleep_collider_changes_ = 0;
-  StepFault last_fault_;
-  bool inject_ = false;
-  InjectedFault injected_fault_ = InjectedFault::kNaN;
+  FaultGuard fault_guard_;
+  Sleeping sleeping_;
 };
-
-// Live poses (grippers, obstacles, robot links) farther than this from the scene origin in any
-// coordinate are refused: nothing a robot handles is 10 km away, and an absurd coordinate (1e300
-// from a corrupted message) would overflow the step's squares into Inf and NaN.
-constexpr double kMaxPoseCoordinate = 1e4;  // m
-
-// Whether a live pose may enter the simulation: a finite position within kMaxPoseCoordinate, a
-// finite orientation of non-zero length. Empty when it may, else why not.
-std::string poseProblem(const Pose& pose);
 
 // Pose interpolation used by trajectories and substeps: linear position, slerp orientation.
 Pose interpolate(const Pose& a, const Pose& b, double s);

@@ -7,6 +7,9 @@
 #include <unordered_map>
 #include <utility>
 
+#include "pbd_cloth/collision/collisions.h"
+#include "pbd_cloth/config/scene_config.h"
+
 namespace pbd_cloth {
 
 namespace {
@@ -124,6 +127,34 @@ int countSelfIntersections(const Particles& particles, const ClothTopology& topo
     ++edge_index;
   }
   return static_cast<int>(hits.size());
+}
+
+Metrics measureMetrics(const Particles& particles, const ClothTopology& topology,
+                       const Collisions& collisions, const SolverConfig& solver) {
+  Metrics metrics;
+  computeStrain(particles, topology, metrics.max_strain, metrics.mean_strain);
+  computeStructuralStrain(particles, topology, metrics.structural_max_strain,
+                          metrics.structural_mean_strain);
+  metrics.max_penetration = collisions.maxPenetration(particles, topology);
+  metrics.finite = allFinite(particles);
+  // A diverged state has no meaningful geometry to intersect.
+  metrics.self_intersections = metrics.finite ? countSelfIntersections(particles, topology) : -1;
+  const Vec3& g = solver.gravity;
+  for (int i = 0; i < particles.size(); ++i) {
+    if (particles.isKinematic(i)) continue;
+    metrics.kinetic_energy += 0.5 * particles.mass[i] * particles.velocity[i].squaredNorm();
+    metrics.potential_energy -= particles.mass[i] * g.dot(particles.position[i]);
+  }
+  if (solver.method == Method::kMassSpring) {
+    // Elastic energy of the explicit springs, so the baseline's energy is the full Hamiltonian.
+    for (const DistanceConstraint& con : topology.stretch) {
+      const double stretch =
+          (particles.position[con.i] - particles.position[con.j]).norm() - con.rest_length;
+      metrics.potential_energy += 0.5 * solver.spring_stiffness * stretch * stretch;
+    }
+  }
+  metrics.energy = metrics.kinetic_energy + metrics.potential_energy;
+  return metrics;
 }
 
 }  // namespace pbd_cloth

@@ -1,4 +1,5 @@
-// Simulation::getState / setState: the saved state (saved_state.h) and its check against the scene.
+// Simulation::getState / setState: the simulation as a SimulationState (the saved state's
+// contents, saved_state.h) and back, with the check that a state fits this scene.
 #include <cmath>
 #include <set>
 #include <sstream>
@@ -59,8 +60,8 @@ void Simulation::getState(SimulationState& state) const {
   state.position = particles_.position;
   state.velocity = particles_.velocity;
   state.substep_start = particles_.substep_start;
-  state.grippers.resize(grippers_.size());
-  for (std::size_t g = 0; g < grippers_.size(); ++g) {
+  state.grippers.resize(grippers_.count());
+  for (int g = 0; g < grippers_.count(); ++g) {
     const GripperState& from = grippers_[g];
     GripperSnapshot& to = state.grippers[g];
     to.name = scene_.grippers[g].name;
@@ -79,8 +80,8 @@ void Simulation::getState(SimulationState& state) const {
     state.colliders[k].name = colliders[k].name;
     collisions_.getColliderState(static_cast<int>(k), state.colliders[k]);
   }
-  state.robot_links.resize(links_.size());
-  for (std::size_t l = 0; l < links_.size(); ++l) {
+  state.robot_links.resize(links_.count());
+  for (int l = 0; l < links_.count(); ++l) {
     BodySnapshot& to = state.robot_links[l];
     to = BodySnapshot();
     to.name = scene_.robot.model.links[l].name;
@@ -108,7 +109,7 @@ std::string Simulation::checkState(const SimulationState& state) const {
   if (error.empty()) error = checkVectors("substep_start", state.substep_start);
   if (!error.empty()) return error;
 
-  error = checkCount("grippers", state.grippers.size(), grippers_.size(), "grippers");
+  error = checkCount("grippers", state.grippers.size(), grippers_.count(), "grippers");
   std::set<int> held;
   for (std::size_t g = 0; error.empty() && g < state.grippers.size(); ++g) {
     const GripperSnapshot& gripper = state.grippers[g];
@@ -149,7 +150,7 @@ std::string Simulation::checkState(const SimulationState& state) const {
     error = checkBody(at("colliders", k), state.colliders[k], colliders[k].name);
   }
   if (error.empty()) {
-    error = checkCount("robot_links", state.robot_links.size(), links_.size(), "robot links");
+    error = checkCount("robot_links", state.robot_links.size(), links_.count(), "robot links");
   }
   for (std::size_t l = 0; error.empty() && l < state.robot_links.size(); ++l) {
     error = checkBody(at("robot_links", l), state.robot_links[l], scene_.robot.model.links[l].name);
@@ -187,7 +188,7 @@ bool Simulation::setState(const SimulationState& state, std::string& reason) {
   particles_.kinematic_from = state.position;
   particles_.kinematic_to = state.position;
   particles_.inverse_mass = initial_particles_.inverse_mass;
-  for (std::size_t g = 0; g < grippers_.size(); ++g) {
+  for (int g = 0; g < grippers_.count(); ++g) {
     const GripperSnapshot& from = state.grippers[g];
     GripperState& to = grippers_[g];
     to.pose = from.pose;
@@ -203,7 +204,7 @@ bool Simulation::setState(const SimulationState& state, std::string& reason) {
   for (std::size_t k = 0; k < state.colliders.size(); ++k) {
     collisions_.setColliderState(static_cast<int>(k), state.colliders[k]);
   }
-  for (std::size_t l = 0; l < links_.size(); ++l) {
+  for (int l = 0; l < links_.count(); ++l) {
     const BodySnapshot& from = state.robot_links[l];
     links_[l].pose = from.pose;
     links_[l].target = from.target;
