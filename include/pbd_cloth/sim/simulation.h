@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "pbd_cloth/sim/colliders.h"
 #include "pbd_cloth/sim/metrics.h"
 #include "pbd_cloth/model/particles.h"
 #include "pbd_cloth/config/scene_config.h"
@@ -291,8 +292,5 @@ constexpr double kMaxPoseCoordinate = 1e4;  // m
 // Whether a live pose may enter the simulation: a finite position within kMaxPoseCoordinate, a
 // finite orientation of non-zero length. Empty when it may, else why not.
 std::string poseProblem(const Pose& pose);
-
-// Pose interpolation used by trajectories and substeps: linear position, slerp orientation.
-Pose interpolate(const Pose& a, const Pose& b, double s);
 
 }  // namespace pbd_cloth

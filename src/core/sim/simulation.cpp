@@ -9,13 +9,6 @@
 
 namespace pbd_cloth {
 
-Pose interpolate(const Pose& a, const Pose& b, double s) {
-  Pose out;
-  out.position = (1.0 - s) * a.position + s * b.position;
-  out.orientation = a.orientation.slerp(s, b.orientation);
-  return out;
-}
-
 namespace {
 
 // Pose of a scripted trajectory at time t: linear/slerp between waypoints, held after the last.
