@@ -8,12 +8,13 @@
 #include <limits>
 #include <random>
 
+#include "pbd_cloth/sim/colliders.h"
 #include "pbd_cloth/sim/simulation.h"
 
 namespace pbd_cloth {
 namespace {
 
-constexpr double kNoHit = std::numeric_limits<double>::infinity();
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
 // Points this close to the camera plane (or behind it) cannot be projected to pixels.
 constexpr double kNearPlane = 1e-9;
 
@@ -30,7 +31,7 @@ PixelRect wholeImage(const PinholeCamera& camera) {
 // The pixels onto which points (camera frame) of a convex set with these corners can project.
 // Whole image when the set reaches behind the camera plane; empty when all of it is behind.
 PixelRect projectedRect(const Vec3* corners, int count, const PinholeCamera& camera) {
-  double u_lo = kNoHit, u_hi = -kNoHit, v_lo = kNoHit, v_hi = -kNoHit;
+  double u_lo = kInfinity, u_hi = -kInfinity, v_lo = kInfinity, v_hi = -kInfinity;
   bool all_behind = true;
   bool all_in_front = true;
   for (int k = 0; k < count; ++k) {
@@ -71,125 +72,21 @@ void boxCorners(const Vec3& lo, const Vec3& hi, const Frame& frame, Vec3 corners
   }
 }
 
-// Nearest t > 0 among the roots of a t^2 + 2 b t + c = 0 that `accept` (kNoHit if none).
-template <typename Accept>
-double nearestRoot(double a, double b, double c, Accept accept) {
-  if (a <= 0.0) return kNoHit;
-  const double discriminant = b * b - a * c;
-  if (discriminant < 0.0) return kNoHit;
-  const double root = std::sqrt(discriminant);
-  const double t0 = (-b - root) / a;
-  if (t0 > 0.0 && accept(t0)) return t0;
-  const double t1 = (-b + root) / a;
-  if (t1 > 0.0 && accept(t1)) return t1;
-  return kNoHit;
-}
-
-double raySphere(const Vec3& o, const Vec3& d, const Vec3& centre, double radius) {
-  const Vec3 oc = o - centre;
-  return nearestRoot(d.dot(d), oc.dot(d), oc.dot(oc) - radius * radius,
-                     [](double) { return true; });
-}
-
-// The side wall x^2 + y^2 = r^2 for |z| <= h (no ends).
-double rayTube(const Vec3& o, const Vec3& d, double radius, double half_length) {
-  return nearestRoot(d.x() * d.x() + d.y() * d.y(), o.x() * d.x() + o.y() * d.y(),
-                     o.x() * o.x() + o.y() * o.y() - radius * radius,
-                     [&](double t) { return std::abs(o.z() + t * d.z()) <= half_length; });
-}
-
-// The flat ends z = +-h within radius r.
-double rayDiscs(const Vec3& o, const Vec3& d, double radius, double half_length) {
-  if (d.z() == 0.0) return kNoHit;
-  double best = kNoHit;
-  for (double z : {-half_length, half_length}) {
-    const double t = (z - o.z()) / d.z();
-    const double x = o.x() + t * d.x(), y = o.y() + t * d.y();
-    if (t > 0.0 && x * x + y * y <= radius * radius) best = std::min(best, t);
-  }
-  return best;
-}
-
-// Slabs (Kay and Kajiya 1986): the entry point, or the exit point from inside.
-double rayBox(const Vec3& o, const Vec3& d, const Vec3& half) {
-  double t_near = -kNoHit, t_far = kNoHit;
-  for (int i = 0; i < 3; ++i) {
-    if (d[i] == 0.0) {
-      if (std::abs(o[i]) > half[i]) return kNoHit;
-      continue;
-    }
-    double t0 = (-half[i] - o[i]) / d[i];
-    double t1 = (half[i] - o[i]) / d[i];
-    if (t0 > t1) std::swap(t0, t1);
-    t_near = std::max(t_near, t0);
-    t_far = std::min(t_far, t1);
-  }
-  if (t_near > t_far || t_far <= 0.0) return kNoHit;
-  return t_near > 0.0 ? t_near : t_far;
-}
-
-double rayPlane(const Vec3& o, const Vec3& d, const Vec3& normal, double offset) {
-  const double rate = normal.dot(d);
-  if (rate == 0.0) return kNoHit;
-  const double t = (offset - normal.dot(o)) / rate;
-  return t > 0.0 ? t : kNoHit;
-}
-
-// Ray (local frame, any scale of d) against an analytic shape; kNoHit for a mesh (drawn as
-// triangles).
-double rayShape(const Shape& shape, const Vec3& o, const Vec3& d) {
-  switch (shape.type) {
-    case ShapeType::kSphere:
-      return raySphere(o, d, Vec3::Zero(), shape.radius);
-    case ShapeType::kBox:
-      return rayBox(o, d, shape.half_extents);
-    case ShapeType::kCapsule: {
-      const Vec3 end(0.0, 0.0, shape.half_length);
-      return std::min({rayTube(o, d, shape.radius, shape.half_length),
-                       raySphere(o, d, end, shape.radius), raySphere(o, d, -end, shape.radius)});
-    }
-    case ShapeType::kCylinder:
-      return std::min(rayTube(o, d, shape.radius, shape.half_length),
-                      rayDiscs(o, d, shape.radius, shape.half_length));
-    case ShapeType::kPlane:
-      return rayPlane(o, d, shape.normal, shape.offset);
-    case ShapeType::kMesh:
-      break;
-  }
-  return kNoHit;
-}
-
-// Local bounding box of an analytic or mesh shape (unpadded); a plane has none (infinite).
-void localBounds(const Shape& shape, Vec3& lo, Vec3& hi) {
-  hi = Vec3::Constant(kNoHit);
-  switch (shape.type) {
-    case ShapeType::kSphere:
-      hi = Vec3::Constant(shape.radius);
-      break;
-    case ShapeType::kBox:
-      hi = shape.half_extents;
-      break;
-    case ShapeType::kCapsule:
-      hi = Vec3(shape.radius, shape.radius, shape.half_length + shape.radius);
-      break;
-    case ShapeType::kCylinder:
-      hi = Vec3(shape.radius, shape.radius, shape.half_length);
-      break;
-    case ShapeType::kMesh:
-      lo = shape.mesh->boundsMin();
-      hi = shape.mesh->boundsMax();
-      return;
-    case ShapeType::kPlane:
-      break;
-  }
-  lo = -hi;
-}
-
 std::uint64_t splitMix64(std::uint64_t x) {
   x += 0x9E3779B97F4A7C15ull;
   x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
   x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
   return x ^ (x >> 31);
+}
+
+// The pixels onto which a shape (not a plane) placed by `shape_in_camera` can project: its bounds
+// (shapes.h worldBounds), an axis-aligned box in the camera frame.
+PixelRect boundsRect(const Shape& shape, const Frame& shape_in_camera,
+                     const PinholeCamera& camera) {
+  Vec3 lo = Vec3::Zero(), hi = Vec3::Zero(), corners[8];
+  worldBounds(shape, shape_in_camera, lo, hi);
+  boxCorners(lo, hi, Frame(), corners);
+  return projectedRect(corners, 8, camera);
 }
 
 }  // namespace
@@ -329,28 +226,22 @@ void DepthRenderer::drawShape(const Shape& shape, const Frame& shape_in_camera,
     for (std::size_t i = 0; i < vertices.size(); ++i) {
       camera_points_[i] = shape_in_camera.toWorld(vertices[i]);
     }
-    Vec3 corners[8];
-    boxCorners(shape.mesh->boundsMin(), shape.mesh->boundsMax(), shape_in_camera, corners);
-    if (projectedRect(corners, 8, camera).empty()) return;
+    if (boundsRect(shape, shape_in_camera, camera).empty()) return;
     for (const TriangleMesh::Triangle& t : shape.mesh->triangles()) {
       drawTriangle(camera_points_[t[0]], camera_points_[t[1]], camera_points_[t[2]], camera, depth);
     }
     return;
   }
-  PixelRect rect = wholeImage(camera);
-  if (shape.type != ShapeType::kPlane) {
-    Vec3 lo = Vec3::Zero(), hi = Vec3::Zero(), corners[8];
-    localBounds(shape, lo, hi);
-    boxCorners(lo, hi, shape_in_camera, corners);
-    rect = projectedRect(corners, 8, camera);
-  }
+  const PixelRect rect = shape.type == ShapeType::kPlane
+                             ? wholeImage(camera)
+                             : boundsRect(shape, shape_in_camera, camera);
   // The ray in the shape's frame: origin and direction (linear in the pixel).
   const Vec3 origin = shape_in_camera.toLocal(Vec3::Zero());
   const Eigen::Matrix3d to_local = shape_in_camera.rotation.transpose();
   for (int v = rect.v0; v <= rect.v1; ++v) {
     float* row = depth + static_cast<std::size_t>(v) * camera.width;
     for (int u = rect.u0; u <= rect.u1; ++u) {
-      const double t = rayShape(shape, origin, to_local * camera.ray(u, v));
+      const double t = rayHit(shape, origin, to_local * camera.ray(u, v));
       if (t < row[u]) row[u] = static_cast<float>(t);
     }
   }

@@ -27,6 +27,7 @@
 #include <vector>
 
 #include "pbd_cloth/collision/contact.h"
+#include "pbd_cloth/geometry/triangle_queries.h"
 #include "pbd_cloth/geometry/triangle_tree.h"
 #include "pbd_cloth/model/particles.h"
 
@@ -43,10 +44,6 @@ struct MotionBounds {
   const Vec3Array& path_move;
   double path_slack;
 };
-
-// Distance from q to the triangle (p1, p2, p3), and between the segments p1p2 and q1q2.
-double pointTriangleDistance(const Vec3& q, const Vec3& p1, const Vec3& p2, const Vec3& p3);
-double segmentSegmentDistance(const Vec3& p1, const Vec3& p2, const Vec3& q1, const Vec3& q2);
 
 struct SelfContactPair {
   // Vertex-triangle: the vertex, then the triangle's corners. Edge-edge: one edge, then the other.

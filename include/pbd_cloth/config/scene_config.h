@@ -12,6 +12,9 @@
 #include <utility>
 #include <vector>
 
+#include "pbd_cloth/geometry/pose.h"
+#include "pbd_cloth/geometry/shape_type.h"
+
 namespace pbd_cloth {
 
 class TriangleMesh;  // mesh_shape.h: a loaded mesh shape with its signed-distance queries
@@ -43,19 +46,6 @@ enum class Ordering { kGaussSeidel, kJacobi };
 
 const char* toString(Method method);
 const char* toString(Ordering ordering);
-
-struct Pose {
-  Eigen::Vector3d position = Eigen::Vector3d::Zero();
-  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
-
-  // The pose `local`, given in this pose's frame, expressed in the frame this pose is given in.
-  Pose compose(const Pose& local) const {
-    Pose out;
-    out.position = position + orientation * local.position;
-    out.orientation = (orientation * local.orientation).normalized();
-    return out;
-  }
-};
 
 // Upper limit of solver.substeps, solver.iterations and solver.search_window: not physics, but a
 // typo like substeps: 50000 would otherwise stall the node before anyone sees an error.
@@ -178,7 +168,6 @@ struct GripperConfig {
   std::vector<Waypoint> trajectory;  // grippers[i].trajectory
 };
 
-enum class ShapeType { kSphere, kBox, kCapsule, kPlane, kCylinder, kMesh };
 const char* toString(ShapeType shape);
 
 // One collision shape: an obstacle of the scene, or one <collision> element of a robot link (then

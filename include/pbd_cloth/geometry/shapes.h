@@ -1,18 +1,22 @@
-// Geometry of the obstacles and robot links: the one shape interface. The signed distance of a
-// point to a plane, sphere, box, capsule, cylinder or closed triangle mesh in the shape's own
-// frame, and a swept-sphere query for continuous collision handling, which works for every shape
-// because every distance here is exact (1-Lipschitz). Plain structs and a switch on the shape type:
-// no virtual calls in the contact loop.
+// Geometry of the obstacles and robot links: the one shape interface, used alike by the
+// collisions, the robot links and the depth camera. In the shape's own frame: the signed distance
+// of a point to a plane, sphere, box, capsule, cylinder or closed triangle mesh, the closest
+// surface point, a ray's first hit and the bounds, and a swept-sphere query for continuous
+// collision handling, which works for every shape because every distance here is exact
+// (1-Lipschitz). Plain structs and a switch on the shape type: no virtual calls in the contact
+// loop.
 #pragma once
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include <limits>
 #include <memory>
 
-#include "pbd_cloth/config/scene_config.h"
 #include "pbd_cloth/geometry/mesh_shape.h"
-#include "pbd_cloth/model/particles.h"
+#include "pbd_cloth/geometry/pose.h"
+#include "pbd_cloth/geometry/shape_type.h"
+#include "pbd_cloth/geometry/vector_types.h"
 
 namespace pbd_cloth {
 
@@ -33,23 +37,6 @@ struct Shape {
   double padding = 0.0;
 };
 
-// Builds the local shape of an obstacle. The plane's normal is normalised together with its offset
-// so that n.p - offset stays the same plane and becomes a true (1-Lipschitz) distance.
-Shape makeShape(const ObstacleConfig& obstacle);
-
-// A rigid placement: world = rotation * local + translation.
-struct Frame {
-  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
-  Vec3 translation = Vec3::Zero();
-
-  Vec3 toLocal(const Vec3& x) const { return rotation.transpose() * (x - translation); }
-  Vec3 toWorld(const Vec3& x) const { return rotation * x + translation; }
-};
-
-Frame frameFromPose(const Pose& pose);
-// Pose at fraction s of the motion a -> b: linear position, slerp orientation.
-Frame interpolateFrame(const Pose& a, const Pose& b, double s);
-
 // World-space bounding box of the shape placed at `frame`. A plane's solid is a half-space:
 // infinite, except on the axis its normal lies along when the normal lies exactly along one
 // (a floor, a wall), where it ends at the plane.
@@ -63,6 +50,24 @@ void worldBounds(const Shape& shape, const Frame& frame, Vec3& lo, Vec3& hi);
 // other shapes ignore it.
 double signedDistance(const Shape& shape, const Vec3& x, Vec3& normal, int* hint = nullptr);
 double signedDistance(const Shape& shape, const Vec3& x);
+
+// The point of the (padded) surface nearest to the local point x: x moved by its signed distance
+// against the normal (exact because the distance is).
+inline Vec3 closestPoint(const Shape& shape, const Vec3& x) {
+  Vec3 normal;
+  const double distance = signedDistance(shape, x, normal);
+  return x - distance * normal;
+}
+
+// No hit of a ray (rayHit, raySphere).
+constexpr double kNoRayHit = std::numeric_limits<double>::infinity();
+
+// The first hit t > 0 of the ray o + t d (local frame, any scale of d) with the shape's unpadded
+// surface, in closed form; kNoRayHit when it misses, and for a mesh (the depth camera draws a
+// mesh's triangles instead, depth_camera.cpp). From inside a solid shape: where the ray leaves it.
+double rayHit(const Shape& shape, const Vec3& o, const Vec3& d);
+// The same for a sphere of this radius about `centre` (a particle).
+double raySphere(const Vec3& o, const Vec3& d, const Vec3& centre, double radius);
 
 // True when the local point x lies farther than `reach` (>= 0) from the shape's surface, outside
 // it, by a margin well beyond rounding (a relative 1e-9): signedDistance(shape, x) - r >= d then

@@ -10,7 +10,7 @@
 
 #include <Eigen/Core>
 
-#include "pbd_cloth/model/particles.h"
+#include "pbd_cloth/geometry/vector_types.h"
 
 namespace pbd_cloth {
 

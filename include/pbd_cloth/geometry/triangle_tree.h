@@ -29,7 +29,7 @@
 
 #include <vector>
 
-#include "pbd_cloth/model/particles.h"
+#include "pbd_cloth/geometry/vector_types.h"
 
 namespace pbd_cloth {
 

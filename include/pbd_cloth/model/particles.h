@@ -6,12 +6,9 @@
 #include <Eigen/Geometry>
 #include <vector>
 
-namespace pbd_cloth {
+#include "pbd_cloth/geometry/vector_types.h"
 
-using Vec3 = Eigen::Vector3d;
-// Double precision throughout: at 1000 Hz x 100 substeps one substep moves a particle h^2 g = 1e-9
-// m, below float32 resolution near 1 m (REFERENCE_CASES.md, "Precision").
-using Vec3Array = std::vector<Vec3>;
+namespace pbd_cloth {
 
 struct Particles {
   Vec3Array position;        // x (m)

@@ -12,6 +12,7 @@
 #include "pbd_cloth/constraints/taut_chains.h"
 #include "pbd_cloth/constraints/tethers.h"
 #include "pbd_cloth/model/particles.h"
+#include "pbd_cloth/sim/colliders.h"
 #include "pbd_cloth/sim/fault_guard.h"
 #include "pbd_cloth/sim/grippers.h"
 #include "pbd_cloth/sim/live_pose.h"
@@ -208,8 +209,5 @@ class Simulation {
   FaultGuard fault_guard_;
   Sleeping sleeping_;
 };
-
-// Pose interpolation used by trajectories and substeps: linear position, slerp orientation.
-Pose interpolate(const Pose& a, const Pose& b, double s);
 
 }  // namespace pbd_cloth

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <limits>
 
+#include "pbd_cloth/sim/colliders.h"
+
 namespace pbd_cloth {
 
 namespace {

@@ -195,60 +195,6 @@ bool allKinematic(const Particles& p, int a, int b, int c, int d) {
 
 }  // namespace
 
-// Distance from q to the closest point of the triangle (p1, p2, p3) (Ericson 2005, sec. 5.1.5:
-// the Voronoi region of q among the corners, edges and face).
-double pointTriangleDistance(const Vec3& q, const Vec3& p1, const Vec3& p2, const Vec3& p3) {
-  const Vec3 ab = p2 - p1, ac = p3 - p1, ap = q - p1;
-  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0.0 && d2 <= 0.0) return ap.norm();
-  const Vec3 bp = q - p2;
-  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0.0 && d4 <= d3) return bp.norm();
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return (ap - (d1 / (d1 - d3)) * ab).norm();
-  const Vec3 cp = q - p3;
-  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0.0 && d5 <= d6) return cp.norm();
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return (ap - (d2 / (d2 - d6)) * ac).norm();
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0) {
-    return (bp - ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (p3 - p2)).norm();
-  }
-  const double denominator = va + vb + vc;
-  if (!(denominator > 0.0)) return 0.0;  // degenerate: no cull
-  return (ap - (vb / denominator) * ab - (vc / denominator) * ac).norm();
-}
-
-// Distance between the segments p1p2 and q1q2 (Ericson 2005, sec. 5.1.9: the closest points of
-// the lines, clamped to the segments in turn).
-double segmentSegmentDistance(const Vec3& p1, const Vec3& p2, const Vec3& q1, const Vec3& q2) {
-  const Vec3 d1 = p2 - p1, d2 = q2 - q1, r = p1 - q1;
-  const double a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r);
-  double s = 0.0, t = 0.0;
-  if (a <= kDegenerate && e <= kDegenerate) return r.norm();
-  if (a <= kDegenerate) {
-    t = std::clamp(f / e, 0.0, 1.0);
-  } else {
-    const double c = d1.dot(r);
-    if (e <= kDegenerate) {
-      s = std::clamp(-c / a, 0.0, 1.0);
-    } else {
-      const double b = d1.dot(d2), denominator = a * e - b * b;
-      s = denominator > 0.0 ? std::clamp((b * f - c * e) / denominator, 0.0, 1.0) : 0.0;
-      t = (b * s + f) / e;
-      if (t < 0.0) {
-        t = 0.0;
-        s = std::clamp(-c / a, 0.0, 1.0);
-      } else if (t > 1.0) {
-        t = 1.0;
-        s = std::clamp((b - c) / a, 0.0, 1.0);
-      }
-    }
-  }
-  return (p1 + s * d1 - (q1 + t * d2)).norm();
-}
-
 void SelfCollision::reserve(const Particles& particles, const ClothTopology& topology) {
   const int triangles = topology.triangleCount();
   edges_.clear();

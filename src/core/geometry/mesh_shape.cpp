@@ -9,66 +9,14 @@
 #include <tuple>
 #include <utility>
 
+#include "pbd_cloth/geometry/triangle_queries.h"
+
 namespace pbd_cloth {
 
 namespace {
 
-using Vec3 = TriangleMesh::Vec3;
-
 // Triangles per leaf of the tree: a few exact triangle tests are cheaper than another box level.
 constexpr int kLeafSize = 4;
-
-// Which feature of a triangle holds the closest point: its face, edge k (v_k, v_{k+1}) or vertex k.
-enum class Feature { kFace, kEdge, kVertex };
-
-// Closest point on triangle (a, b, c) to p, and the feature it lies on (Ericson, Real-Time
-// Collision Detection, sec. 5.1.5: Voronoi regions of the vertices, then edges, then the face).
-Vec3 closestOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c, Feature& feature,
-                       int& index) {
-  const Vec3 ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0.0 && d2 <= 0.0) {
-    feature = Feature::kVertex;
-    index = 0;
-    return a;
-  }
-  const Vec3 bp = p - b;
-  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0.0 && d4 <= d3) {
-    feature = Feature::kVertex;
-    index = 1;
-    return b;
-  }
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
-    feature = Feature::kEdge;
-    index = 0;
-    return a + (d1 / (d1 - d3)) * ab;
-  }
-  const Vec3 cp = p - c;
-  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0.0 && d5 <= d6) {
-    feature = Feature::kVertex;
-    index = 2;
-    return c;
-  }
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
-    feature = Feature::kEdge;
-    index = 2;  // edge (c, a)
-    return a + (d2 / (d2 - d6)) * ac;
-  }
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
-    feature = Feature::kEdge;
-    index = 1;  // edge (b, c)
-    return b + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b);
-  }
-  feature = Feature::kFace;
-  index = 0;
-  const double denominator = 1.0 / (va + vb + vc);
-  return a + ab * (vb * denominator) + ac * (vc * denominator);
-}
 
 double boxDistanceSquared(const Vec3& x, const Vec3& lo, const Vec3& hi) {
   return (lo - x).cwiseMax(x - hi).cwiseMax(0.0).squaredNorm();
@@ -202,14 +150,14 @@ double TriangleMesh::signedDistance(const Vec3& x, Vec3& normal, int* hint) cons
   double best = std::numeric_limits<double>::infinity();
   Vec3 closest = Vec3::Zero();
   int best_triangle = 0;
-  Feature best_feature = Feature::kFace;
+  TriangleFeature best_feature = TriangleFeature::kFace;
   int best_index = 0;
   const auto test_triangle = [&](int t) {
     const Triangle& tri = triangles_[t];
-    Feature feature;
+    TriangleFeature feature;
     int index;
-    const Vec3 c = closestOnTriangle(x, vertices_[tri[0]], vertices_[tri[1]], vertices_[tri[2]],
-                                     feature, index);
+    const Vec3 c = closestPointOnTriangle(x, vertices_[tri[0]], vertices_[tri[1]],
+                                          vertices_[tri[2]], feature, index);
     const double d2 = (x - c).squaredNorm();
     if (d2 < best) {
       best = d2;
@@ -245,13 +193,13 @@ double TriangleMesh::signedDistance(const Vec3& x, Vec3& normal, int* hint) cons
   if (hint != nullptr) *hint = best_triangle;
   Vec3 pseudo_normal = Vec3::Zero();
   switch (best_feature) {
-    case Feature::kFace:
+    case TriangleFeature::kFace:
       pseudo_normal = face_normals_[best_triangle];
       break;
-    case Feature::kEdge:
+    case TriangleFeature::kEdge:
       pseudo_normal = edge_normals_[best_triangle][best_index];
       break;
-    case Feature::kVertex:
+    case TriangleFeature::kVertex:
       pseudo_normal = vertex_normals_[triangles_[best_triangle][best_index]];
       break;
   }

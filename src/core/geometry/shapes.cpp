@@ -14,35 +14,92 @@ constexpr double kSweepTolerance = 1e-7;
 // such a path penetrates by no more than the discrete test then resolves.
 constexpr int kSweepMaxSteps = 64;
 
+// Nearest t > 0 among the roots of a t^2 + 2 b t + c = 0 that `accept` (kNoRayHit if none).
+template <typename Accept>
+double nearestRoot(double a, double b, double c, Accept accept) {
+  if (a <= 0.0) return kNoRayHit;
+  const double discriminant = b * b - a * c;
+  if (discriminant < 0.0) return kNoRayHit;
+  const double root = std::sqrt(discriminant);
+  const double t0 = (-b - root) / a;
+  if (t0 > 0.0 && accept(t0)) return t0;
+  const double t1 = (-b + root) / a;
+  if (t1 > 0.0 && accept(t1)) return t1;
+  return kNoRayHit;
+}
+
+// The side wall x^2 + y^2 = r^2 for |z| <= h (no ends).
+double rayTube(const Vec3& o, const Vec3& d, double radius, double half_length) {
+  return nearestRoot(d.x() * d.x() + d.y() * d.y(), o.x() * d.x() + o.y() * d.y(),
+                     o.x() * o.x() + o.y() * o.y() - radius * radius,
+                     [&](double t) { return std::abs(o.z() + t * d.z()) <= half_length; });
+}
+
+// The flat ends z = +-h within radius r.
+double rayDiscs(const Vec3& o, const Vec3& d, double radius, double half_length) {
+  if (d.z() == 0.0) return kNoRayHit;
+  double best = kNoRayHit;
+  for (double z : {-half_length, half_length}) {
+    const double t = (z - o.z()) / d.z();
+    const double x = o.x() + t * d.x(), y = o.y() + t * d.y();
+    if (t > 0.0 && x * x + y * y <= radius * radius) best = std::min(best, t);
+  }
+  return best;
+}
+
+// Slabs (Kay and Kajiya 1986): the entry point, or the exit point from inside.
+double rayBox(const Vec3& o, const Vec3& d, const Vec3& half) {
+  double t_near = -kNoRayHit, t_far = kNoRayHit;
+  for (int i = 0; i < 3; ++i) {
+    if (d[i] == 0.0) {
+      if (std::abs(o[i]) > half[i]) return kNoRayHit;
+      continue;
+    }
+    double t0 = (-half[i] - o[i]) / d[i];
+    double t1 = (half[i] - o[i]) / d[i];
+    if (t0 > t1) std::swap(t0, t1);
+    t_near = std::max(t_near, t0);
+    t_far = std::min(t_far, t1);
+  }
+  if (t_near > t_far || t_far <= 0.0) return kNoRayHit;
+  return t_near > 0.0 ? t_near : t_far;
+}
+
+double rayPlane(const Vec3& o, const Vec3& d, const Vec3& normal, double offset) {
+  const double rate = normal.dot(d);
+  if (rate == 0.0) return kNoRayHit;
+  const double t = (offset - normal.dot(o)) / rate;
+  return t > 0.0 ? t : kNoRayHit;
+}
+
 }  // namespace
 
-Shape makeShape(const ObstacleConfig& obstacle) {
-  Shape shape;
-  shape.type = obstacle.shape;
-  shape.radius = obstacle.radius;
-  shape.half_length = 0.5 * obstacle.length;
-  shape.half_extents = 0.5 * obstacle.size;
-  const double norm = obstacle.normal.norm();
-  shape.normal = norm > 0.0 ? Vec3(obstacle.normal / norm) : Vec3::UnitZ();
-  shape.offset = norm > 0.0 ? obstacle.offset / norm : obstacle.offset;
-  shape.mesh = obstacle.mesh_data;
-  shape.padding = obstacle.padding;
-  return shape;
+double raySphere(const Vec3& o, const Vec3& d, const Vec3& centre, double radius) {
+  const Vec3 oc = o - centre;
+  return nearestRoot(d.dot(d), oc.dot(d), oc.dot(oc) - radius * radius,
+                     [](double) { return true; });
 }
 
-Frame frameFromPose(const Pose& pose) {
-  Frame frame;
-  frame.rotation = pose.orientation.normalized().toRotationMatrix();
-  frame.translation = pose.position;
-  return frame;
-}
-
-Frame interpolateFrame(const Pose& a, const Pose& b, double s) {
-  Frame frame;
-  frame.rotation =
-      a.orientation.normalized().slerp(s, b.orientation.normalized()).toRotationMatrix();
-  frame.translation = (1.0 - s) * a.position + s * b.position;
-  return frame;
+double rayHit(const Shape& shape, const Vec3& o, const Vec3& d) {
+  switch (shape.type) {
+    case ShapeType::kSphere:
+      return raySphere(o, d, Vec3::Zero(), shape.radius);
+    case ShapeType::kBox:
+      return rayBox(o, d, shape.half_extents);
+    case ShapeType::kCapsule: {
+      const Vec3 end(0.0, 0.0, shape.half_length);
+      return std::min({rayTube(o, d, shape.radius, shape.half_length),
+                       raySphere(o, d, end, shape.radius), raySphere(o, d, -end, shape.radius)});
+    }
+    case ShapeType::kCylinder:
+      return std::min(rayTube(o, d, shape.radius, shape.half_length),
+                      rayDiscs(o, d, shape.radius, shape.half_length));
+    case ShapeType::kPlane:
+      return rayPlane(o, d, shape.normal, shape.offset);
+    case ShapeType::kMesh:
+      break;
+  }
+  return kNoRayHit;
 }
 
 void worldBounds(const Shape& shape, const Frame& frame, Vec3& lo, Vec3& hi) {

@@ -7,13 +7,6 @@
 
 namespace pbd_cloth {
 
-Pose interpolate(const Pose& a, const Pose& b, double s) {
-  Pose out;
-  out.position = (1.0 - s) * a.position + s * b.position;
-  out.orientation = a.orientation.slerp(s, b.orientation);
-  return out;
-}
-
 Simulation::Simulation(const SceneConfig& scene) : scene_(scene) {
   validate(scene_);
   const RobotConfig& robot = scene_.robot;
