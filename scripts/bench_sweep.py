@@ -156,7 +156,7 @@ def hanging_runs(quick):
         'xpbd jacobi': (['solver.ordering=jacobi'], {'ordering': 'jacobi'}),
         'bullet + bending links': (['bullet.bending=1'], {'variant': 'bending_links'}),
     }
-    # hanging.yaml has tethers on since 2026-11-27 (the default scene: README "The default
+    # hanging.yaml has tethers on since 2026-11-27 (the default scene: doc/scenes.md "The default
     # scene"); every other curve measures the cloth without them, as the sweeps before did.
     no_tethers = ['cloth.tethers=false']
     runs = []
@@ -189,13 +189,13 @@ SWINGING_VARIANTS = {
     'xpbd + levels': (['solver.levels=5'], {'variant': 'levels'},
                       substeps_only([10, 20, 30, 36, 40, 50, 60, 80, 120])),
     # Fewer levels: with the top row held, 2 levels meet both targets at 34-36 substeps as 5 do,
-    # for less work a substep (single runs, 2026-12-06; doc/performance.md, "Taut chains held
+    # for less work a substep (single runs, 2026-12-06; doc/journal.md, "2026-12-06: Taut chains held
     # straight").
     'xpbd + 2 levels': (['solver.levels=2'], {'variant': 'levels_2'},
                         substeps_only([30, 32, 34, 36, 40])),
     # The top row between the pinned corners is exactly taut: solver.taut_chains (on by default,
     # taut_chains.h) holds it straight. Off, the sweep has to pull it straight (what the option
-    # bought: 60 substeps instead of 36 for both targets, README "Taut chains held straight").
+    # bought: 60 substeps instead of 36 for both targets, doc/methods.md "Taut chains held straight").
     'xpbd + levels, taut chains off': (['solver.levels=5', 'solver.taut_chains=false'],
                                        {'variant': 'levels_taut_chains_off'},
                                        substeps_only([36, 40, 50, 60, 80])),
@@ -214,8 +214,8 @@ SWINGING_VARIANTS = {
     'xpbd + levels, 2 threads': (['solver.levels=5', 'solver.threads=2'],
                                  {'variant': 'levels_2_threads'}, substeps_only([40, 60, 80])),
     # One diagonal per cell (cloth.shear_diagonals=1, the grid's default link set): the peers'
-    # figures on these links given since issue 12 (Bender's PBD 160 x 1, Bullet 16 x 10; README
-    # and doc/performance.md, "On equal links") compare with these, the two-diagonal ones above
+    # figures on these links given since issue 12 (Bender's PBD 160 x 1, Bullet 16 x 10; doc/journal.md "Speed (issue 12)"
+    # and doc/journal.md, "On equal links") compare with these, the two-diagonal ones above
     # with the issue's own.
     'xpbd + levels, one diagonal': (['solver.levels=5', 'cloth.shear_diagonals=1'],
                                     {'variant': 'levels_one_diagonal'},
@@ -277,7 +277,7 @@ def swinging100_runs(quick):
                 ('bullet', [], substeps_only([5]))]
     else:
         # Neighbouring counts side by side: the strain at the last instant swings between them
-        # (README, target 2), and the chart shows it.
+        # (doc/journal.md, "Target 2, no longer on its edge"), and the chart shows it.
         plan = [('xpbd + levels', levels, substeps_only([40, 60, 80, 88, 96, 104, 112, 128, 160])),
                 # solver.taut_chains off (the top row swept straight, not held): the
                 # substeps target 2 needed before the option.

@@ -625,8 +625,8 @@ def issue12_summary(add, data_dir, swinging, swinging100, fabric, towel, micro):
             add('| %d | %d x %d swinging | not reached in this run | no |' % (number_, size, size))
         if number_ == 1:
             # The same target on one diagonal per cell, the link set of the peers' figures given
-            # since (Bender's PBD 160 x 1: 23.8 ms, Bullet 16 x 10: 16.6 ms; README and
-            # doc/performance.md, "On equal links").
+            # since (Bender's PBD 160 x 1: 23.8 ms, Bullet 16 x 10: 16.6 ms; doc/journal.md "Speed (issue 12)" and
+            # doc/journal.md, "On equal links").
             one = cheapest_both(rows, 'xpbd + levels, one diagonal') if rows else None
             if one:
                 add('| 1 | the same on one diagonal per cell (the link set of the peers\' figures '

@@ -15,8 +15,8 @@ int main(int argc, char** argv) {
   // A fixed mmap threshold. glibc raises it each time a large block is freed; after that the
   // depth images, clouds and their serialized copies (77 kB to MBs, made and freed at the camera
   // rate by several threads) are carved from the threads' heaps among small blocks, where they
-  // fragment and stay resident after they are freed (README "Soak": a long run must not grow).
-  // Fixed, each such block is mapped and unmapped whole (a few system calls per image). A
+  // fragment and stay resident after they are freed (doc/reliability.md "Soak": a long run must not
+  // grow). Fixed, each such block is mapped and unmapped whole (a few system calls per image). A
   // nodelet manager gets the same with MALLOC_MMAP_THRESHOLD_=65536 in its environment.
   mallopt(M_MMAP_THRESHOLD, 64 * 1024);
 #endif

@@ -60,7 +60,7 @@ ClothRos::ClothRos(ros::NodeHandle nh, ros::NodeHandle nh_private)
       loadRobotDescription(scene);
     }
     sim_ = std::make_unique<Simulation>(scene);
-    // A step that blows up is undone and reported, never published (README "Faults").
+    // A step that blows up is undone and reported, never published (doc/reliability.md "Faults").
     sim_->setFaultRecovery(true);
     config_ = readNodeParameters(nh_private_);
   } catch (const ConfigError& error) {
@@ -119,7 +119,7 @@ ClothRos::ClothRos(ros::NodeHandle nh, ros::NodeHandle nh_private)
 
   diagnostics_timer_ = nh_.createWallTimer(ros::WallDuration(diagnostics_->period()),
                                            &ClothRos::diagnosticsCallback, this);
-  // Memory back to the system every few seconds, between steps (README "Soak").
+  // Memory back to the system every few seconds, between steps (doc/reliability.md "Soak").
   memory_timer_ =
       nh_.createWallTimer(ros::WallDuration(kMemoryReleasePeriod), &ClothRos::memoryCallback, this);
   input_spinner_ = std::make_unique<ros::AsyncSpinner>(1, &input_queue_);

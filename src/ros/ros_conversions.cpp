@@ -218,9 +218,9 @@ void RosConversions::toObstacleMarkers(const Simulation& sim, const std_msgs::He
   const std_msgs::ColorRGBA ground = color(0.35f, 0.35f, 0.4f);
   const Eigen::Quaterniond identity = Eigen::Quaterniond::Identity();
   for (int k = 0; k < sim.obstacleCount(); ++k) {
-    const ObstacleConfig& obstacle = sim.obstacle(k);
+    const Collider& obstacle = sim.obstacle(k);
     // The core's own local shape: the plane normal comes normalised together with its offset.
-    const Shape shape = makeShape(obstacle);
+    const Shape& shape = obstacle.shape;
     const auto add = [&](int part, int type, const Vec3& local_position,
                          const Eigen::Quaterniond& local_orientation, const Vec3& scale) {
       Marker marker;

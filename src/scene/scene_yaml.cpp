@@ -214,7 +214,7 @@ YAML::Node listOf(const MapReader& map, const std::string& name, const char* exp
 
 // Keys the solver section offered once, and what a scene that still has one does instead: it
 // fails to load with this message rather than as an unknown key. Options measured as buying
-// nothing left the product (their measurements: doc/performance.md); the switches that only
+// nothing left the product (their measurements: doc/journal.md); the switches that only
 // compare code paths moved to cloth_bench's command line.
 struct RemovedKey {
   const char* name;

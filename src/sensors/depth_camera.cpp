@@ -8,7 +8,6 @@
 #include <limits>
 #include <random>
 
-#include "pbd_cloth/sim/colliders.h"
 #include "pbd_cloth/sim/simulation.h"
 
 namespace pbd_cloth {
@@ -121,11 +120,11 @@ void DepthSnapshot::capture(const Simulation& simulation) {
     }
   }
   const Collisions& collisions = simulation.collisions();
-  const std::vector<ObstacleConfig>& colliders = collisions.obstacles();
+  const std::vector<Collider>& colliders = collisions.obstacles();
   if (shapes.size() != colliders.size()) {
     shapes.clear();
-    for (const ObstacleConfig& collider : colliders) {
-      shapes.push_back(makeShape(collider));
+    for (const Collider& collider : colliders) {
+      shapes.push_back(collider.shape);
       shapes.back().padding = 0.0;
     }
     frames.resize(colliders.size());

@@ -168,10 +168,10 @@ inline void writeCsvRow(std::ofstream& csv, double t, const Metrics& m) {
 
 // The largest strain of the structural links over the run's last second: the median of its
 // metric samples (last_second_median_structural_max_strain). The final instant alone swings
-// between neighbouring settings where a cloth still whips (README, "Target 2, on its edge in
-// strain": 1.01 % at 120 substeps, 2.39 % at 124, 0.999 % at 128); the median over a second is the
-// steady reading beside it. The samples from step `from_step` on count: the last
-// round(step_rate) steps of the run, or every step after the start of a shorter run.
+// between neighbouring settings where a cloth still whips (doc/journal.md, "Target 2, no longer on
+// its edge": on its edge in strain: 1.01 % at 120 substeps, 2.39 % at 124, 0.999 % at 128); the
+// median over a second is the steady reading beside it. The samples from step `from_step` on count:
+// the last round(step_rate) steps of the run, or every step after the start of a shorter run.
 class LastSecondStrain {
  public:
   LastSecondStrain(long long steps, double step_rate, int sample_every)

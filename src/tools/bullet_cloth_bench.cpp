@@ -31,6 +31,7 @@
 #include "pbd_cloth/geometry/mesh_shape.h"
 #include "pbd_cloth/scene/scene_yaml.h"
 #include "pbd_cloth/sim/cloth_builder.h"
+#include "pbd_cloth/sim/colliders.h"
 #include "pbd_cloth/sim/metrics.h"
 
 namespace {
@@ -384,7 +385,7 @@ int run(const Options& options) {
   pbd_cloth::ClothTopology topology;
   pbd_cloth::buildScene(scene, particles, topology);
   pbd_cloth::Collisions collisions;  // only for maxPenetration against the same obstacles
-  collisions.configure(scene);
+  collisions.configure(collisionSettings(scene));
   collisions.prepare(particles, topology);
   BulletCloth cloth(scene, particles, topology, options.bullet);
 

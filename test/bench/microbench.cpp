@@ -82,8 +82,8 @@ SceneConfig clothScene(Method method, int iterations, bool bending) {
 struct SolverRig {
   explicit SolverRig(const SceneConfig& scene) : dt(1.0 / scene.step_rate) {
     buildScene(scene, particles, topology);
-    collisions.configure(scene);
-    solver.configure(scene.solver, scene.cloth);
+    collisions.configure(collisionSettings(scene));
+    solver.configure(scene.solver, clothMaterial(scene.cloth));
     solver.prepare(particles, topology);
     collisions.prepare(particles, topology);
     initial = particles;
@@ -385,7 +385,7 @@ void BM_FlatHinges(benchmark::State& state) {
 struct ContactRig {
   explicit ContactRig(const SceneConfig& scene) {
     buildScene(scene, particles, topology);
-    collisions.configure(scene);
+    collisions.configure(collisionSettings(scene));
     collisions.prepare(particles, topology);
   }
   void begin() {

@@ -88,7 +88,7 @@ inline double obstaclePenetration(const Simulation& sim) {
   double depth = 0.0;
   const Particles& p = sim.particles();
   for (int k = 0; k < sim.obstacleCount(); ++k) {
-    const Shape shape = makeShape(sim.obstacle(k));
+    const Shape& shape = sim.obstacle(k).shape;
     const Frame frame = frameFromPose(sim.obstacle(k).pose);
     for (int i = 0; i < p.size(); ++i) {
       if (p.isKinematic(i)) continue;

@@ -329,8 +329,8 @@ void buildJacobiRig(JacobiRig& rig, int k, double d, Ordering ordering, bool ave
   scene.solver.ordering = ordering;
   scene.solver.jacobi_averaging = averaging;
   scene.solver.relaxation = relaxation;
-  rig.collisions.configure(scene);
-  rig.solver.configure(scene.solver, scene.cloth);
+  rig.collisions.configure(collisionSettings(scene));
+  rig.solver.configure(scene.solver, clothMaterial(scene.cloth));
   rig.solver.prepare(p, rig.topology);
   rig.collisions.prepare(p, rig.topology);
 }

@@ -97,14 +97,14 @@ TEST(RobotLinks, EveryElementOfAMovingLinkPushesTheCloth) {
   const auto& colliders = sim.collisions().obstacles();
   for (std::size_t e = 0; e < 4; ++e) {
     const int k = static_cast<int>(e) + sim.obstacleCount();
-    const Shape shape = makeShape(colliders[k]);
+    const Shape& shape = colliders[k].shape;
     const Frame frame = frameFromPose(colliders[k].pose);
     int touching = 0;
     for (int i = 0; i < sim.particles().cloth_count; ++i) {
       const double d = signedDistance(shape, frame.toLocal(sim.particles().position[i]));
       if (d < scene.cloth.thickness + 1e-3) ++touching;
     }
-    EXPECT_GT(touching, 0) << toString(colliders[k].shape) << " element carries no cloth";
+    EXPECT_GT(touching, 0) << toString(colliders[k].shape.type) << " element carries no cloth";
   }
 }
 
@@ -157,7 +157,7 @@ TEST(RobotLinks, PaddingAndFrictionPerRobot) {
   const auto& colliders = sim.collisions().obstacles();
   ASSERT_EQ(colliders.size(), 4u);
   // A padded sphere is a larger sphere.
-  EXPECT_NEAR(signedDistance(makeShape(colliders[0]), Vec3(0.1, 0.0, 0.0)), 0.1 - 0.06, 1e-15);
+  EXPECT_NEAR(signedDistance(colliders[0].shape, Vec3(0.1, 0.0, 0.0)), 0.1 - 0.06, 1e-15);
   EXPECT_TRUE(colliders[0].has_friction);
 }
 

@@ -610,7 +610,7 @@ TEST(SelfCollision, AllowanceKeptWhileThePairsSideStands) {
   // outside it, so the side follows the start.
   p.substep_start[0] = centroid + Vec3(2.0 * s, 0.0, -0.5 * h);
   p.position = p.substep_start;
-  search.project(p, h, 1, FrictionConfig{0.0, 0.0}, reaction);
+  search.project(p, h, 1, Friction{0.0, 0.0}, reaction);
   EXPECT_EQ(pairOf()->side, -start_side);
   search.measureAllowances(p.step_start, h, slop);
   EXPECT_NEAR(pairOf()->allowance, allowanceFor(1.3 * h, h, slop), 1e-15)

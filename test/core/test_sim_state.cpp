@@ -125,7 +125,7 @@ TEST(SimState, VerletContinuesBitForBit) {
   expectContinuesBitForBit(scene, 60, 120);
 }
 
-// A state's positions are taken as they are, pinned particles included (README "Saving and
+// A state's positions are taken as they are, pinned particles included (doc/scenes.md "Saving and
 // restoring state"): a pinned corner moved 10 cm in the state is accepted, stays exactly there
 // through the steps after, and the cloth hangs from it (its neighbour follows within a link; with
 // tethers, as "Choosing a method" advises for a hanging cloth and hanging.yaml has: without them

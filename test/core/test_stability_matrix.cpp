@@ -163,9 +163,9 @@ double plainJacobiDisplacement(int k, double d, int passes) {
   for (int c = 0; c < k; ++c) topology.stretch.push_back({1, c % 2 == 0 ? 0 : 2, 1.0});
   topology.structural_count = k;
   Collisions collisions;
-  collisions.configure(scene);
+  collisions.configure(collisionSettings(scene));
   Solver solver;
-  solver.configure(scene.solver, scene.cloth);
+  solver.configure(scene.solver, clothMaterial(scene.cloth));
   solver.prepare(p, topology);
   collisions.prepare(p, topology);
   solver.step(1.0 / 60.0, p, topology, collisions);

@@ -135,7 +135,7 @@ TEST(Reconfigure, RefusedValueIsCountedAndSnapsBack) {
 
 // dynamic_reconfigure's server clamps a request to Solver.cfg's range before the callback: the
 // node gets relaxation 1.99 (the cfg's maximum) for 5.0, applies it, answers with it, and has
-// nothing to refuse or count (README, "Bad input").
+// nothing to refuse or count (doc/reliability.md, "Bad input").
 TEST(Reconfigure, OutOfRangeValueIsClampedNotCounted) {
   StateRecorder states(node() + "/state");
   ClothState before;

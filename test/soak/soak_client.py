@@ -21,7 +21,7 @@
 # Prints the figures and FAIL lines; exit status 0 when every check holds.
 #
 # With --rtf-report-only the real-time factor is printed, not checked (scripts/run_tests: a test
-# never asserts wall-clock speed on a shared machine; the long run of the README checks it).
+# never asserts wall-clock speed on a shared machine; the long run of doc/reliability.md "Soak" checks it).
 #
 #   soak_client.py <duration s> <node pid> [seed] [--rtf-report-only]
 import math

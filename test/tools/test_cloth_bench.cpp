@@ -1,6 +1,6 @@
 // cloth_bench as a user runs it (the program, its output line, its files and its exit status),
 // the package's source style and its generated meshes. The accuracy tests drive the core directly;
-// these check the tool the charts and the README figures come from.
+// these check the tool the charts and the README's and doc/benchmarks.md's figures come from.
 #include <gtest/gtest.h>
 #include <stdlib.h>
 #include <sys/wait.h>

@@ -1,6 +1,6 @@
 // Step buffers that may outgrow their reserve in an extreme step (a cloth flung across itself)
 // and the way back to it. Shrinking happens between steps, never inside one: the step itself
-// allocates only when a list outgrows its capacity (README "Soak").
+// allocates only when a list outgrows its capacity (doc/reliability.md "Soak").
 #pragma once
 #include <cstddef>
 #include <vector>

@@ -63,15 +63,15 @@
 
 #include <vector>
 
+#include "pbd_cloth/collision/collider.h"
+#include "pbd_cloth/collision/collider_snapshot.h"
 #include "pbd_cloth/collision/contact.h"
 #include "pbd_cloth/collision/particle_contacts.h"
 #include "pbd_cloth/collision/path_boxes.h"
 #include "pbd_cloth/collision/self_collision.h"
-#include "pbd_cloth/config/scene_config.h"
 #include "pbd_cloth/geometry/shapes.h"
 #include "pbd_cloth/model/particles.h"
 #include "pbd_cloth/parallel/worker_pool.h"
-#include "pbd_cloth/state/saved_state.h"
 
 namespace pbd_cloth {
 
@@ -92,14 +92,14 @@ struct CollisionStats {
 
 class Collisions {
  public:
-  // Reads bounds, friction, thickness, self_collision, gravity (for the motion bound) and
-  // obstacles.
-  void configure(const SceneConfig& scene);
+  // Bounds, friction, thickness, self-collision, gravity (for the motion bound) and the scene's
+  // colliders (sim/colliders.h collisionSettings makes them from the scene).
+  void configure(const CollisionSettings& settings);
   // One more collider after the scene's obstacles (a robot link's collision element, its pose in
   // the scene frame); returns its index. Call before prepare().
-  int addCollider(const ObstacleConfig& collider);
+  int addCollider(const Collider& collider);
   // cloth.friction: every collider without a friction of its own.
-  void setFriction(const FrictionConfig& friction);
+  void setFriction(const Friction& friction);
   // A collider moves from its current pose to `target` over the next step (a kinematic body).
   // A non-finite target is refused (returns false) and the collider keeps its course.
   bool setObstacleTarget(int obstacle, const Pose& target);
@@ -108,7 +108,7 @@ class Collisions {
   void setObstacleEnabled(int obstacle, bool enabled);
   bool obstacleEnabled(int obstacle) const { return enabled_[obstacle] != 0; }
   // Every collider: the scene's obstacles first, then those added.
-  const std::vector<ObstacleConfig>& obstacles() const { return obstacles_; }
+  const std::vector<Collider>& obstacles() const { return obstacles_; }
   // Sizes every buffer (called once the particles exist) and finds the contacts of the initial
   // state, so maxPenetration() is right before the first step.
   void prepare(const Particles& particles, const ClothTopology& topology);
@@ -148,8 +148,9 @@ class Collisions {
   void countInside(const Particles& particles, double slack, std::vector<int>& inside,
                    std::vector<int>& first_inside) const;
 
-  // Saving and restoring a state (saved_state.h): a collider's pose, target and flags (the name is
-  // left to the caller), and the mesh colliders' per-contact search caches.
+  // Saving and restoring a state (state/saved_state.h; collider_snapshot.h): a collider's pose,
+  // target and flags (the name is left to the caller), and the mesh colliders' per-contact search
+  // caches.
   void getColliderState(int collider, BodySnapshot& body) const;
   void setColliderState(int collider, const BodySnapshot& body);
   void getMeshContacts(std::vector<MeshContactCache>& caches) const;
@@ -229,19 +230,19 @@ class Collisions {
   bool particleContactsActive(const Particles& particles) const;
   bool selfCollisionActive(const ClothTopology& topology) const;
 
-  BoundsConfig bounds_;
-  FrictionConfig friction_;
+  ParticleBounds bounds_;
+  Friction friction_;
   double thickness_ = 0.005;
   bool self_collision_ = false;
   Vec3 gravity_ = Vec3(0.0, 0.0, -9.81);
   double max_separation_speed_ = 1.0;
 
-  // Obstacles: configuration and pose at the end of the last step, target of this step, and the
+  // Obstacles: collider and pose at the end of the last step, target of this step, and the
   // local shapes and frames of the current substep.
-  std::vector<ObstacleConfig> obstacles_;
+  std::vector<Collider> obstacles_;
   std::vector<Pose> obstacle_targets_;
   std::vector<Shape> shapes_;
-  std::vector<FrictionConfig> obstacle_friction_;
+  std::vector<Friction> obstacle_friction_;
   std::vector<char> enabled_;
   std::vector<char> teleport_;  // enabled again: jump to the next target
   long collider_changes_ = 0;   // enabled, disabled or state set: counted for sleeping
@@ -304,7 +305,7 @@ class Collisions {
   ParticleContacts particle_contacts_;
   SelfCollision self_collision_pairs_;
   WorkerPool* pool_ = nullptr;
-  // solver.threads is at most 64 (scene_config.cpp).
+  // solver.threads is at most 64 (config/scene_config.cpp validate).
   static constexpr int kMaxThreads = 64;
   // Largest change of each thread's range.
   double thread_max_change_[kMaxThreads] = {};

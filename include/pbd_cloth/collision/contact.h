@@ -5,10 +5,15 @@
 
 #include <algorithm>
 
-#include "pbd_cloth/config/scene_config.h"
 #include "pbd_cloth/model/particles.h"
 
 namespace pbd_cloth {
+
+// Coulomb friction of a contact (cloth.friction, an obstacle's or robot.friction).
+struct Friction {
+  double static_coefficient = 0.5;   // mu_s
+  double kinetic_coefficient = 0.4;  // mu_k, <= mu_s
+};
 
 // Per-contact state while the contact acts.
 //
@@ -49,11 +54,11 @@ struct ContactState {
   // substeps' slip undone in one, which the velocity update turns into a speed of slip / h
   // against the motion. A T-shirt lying on a table (config/tshirt.yaml) never came to rest that
   // way: 23-32 particles kept moving at up to 0.8 m/s at 20 substeps, and at 30 and 40 substeps,
-  // where h is smaller, 500-1200 reached 9-15 m/s (doc/performance.md, "Friction that gave slip
-  // back"). Obstacle contacts pass true. Particle-particle contacts pass false:
-  // in a granular pile the slip that one Gauss-Seidel pass leaves is what the running window
-  // catches up (above), and with a new window after each slip the pile's angle spread from
-  // 25.4-28.9 to 20.9-27.6 deg over 10 to 40 substeps (test_granular.cpp).
+  // where h is smaller, 500-1200 reached 9-15 m/s (doc/journal.md, "2026-11-28: Friction that gave
+  // slip back"). Obstacle contacts pass true. Particle-particle contacts pass false: in a granular
+  // pile the slip that one Gauss-Seidel pass leaves is what the running window catches up (above),
+  // and with a new window after each slip the pile's angle spread from 25.4-28.9 to 20.9-27.6 deg
+  // over 10 to 40 substeps (test_granular.cpp).
   bool beginSubstep(int substep_stamp, int step_stamp, bool in_touch, bool slip_ends_window) {
     if (substep == substep_stamp) return false;
     const bool continuing = window == step_stamp && in_touch && !(sliding && slip_ends_window);
@@ -115,7 +120,7 @@ inline double allowanceFor(double overlap, double contact_distance, double slop)
 // formula; more converge to the Coulomb answer even when another constraint (a floor under the
 // lower of two stacked particles) undoes part of the correction in between.
 inline Vec3 frictionCorrection(const Vec3& relative, ContactState& state,
-                               const FrictionConfig& friction) {
+                               const Friction& friction) {
   const Vec3& n = state.normal;
   const Vec3 tangential = relative - relative.dot(n) * n;  // Delta p_t left now
   const Vec3 applied = state.friction - state.friction.dot(n) * n;

@@ -43,7 +43,7 @@ class ParticleContacts {
   // step, see ContactState); returns the largest correction. `substep` and `step` are stamps.
   // A kinematic particle of a pair gets the pair's multiplier times its gradient added to
   // `reaction` (Collisions::kinematicReaction).
-  double project(Particles& particles, int substep, int step, const FrictionConfig& friction,
+  double project(Particles& particles, int substep, int step, const Friction& friction,
                  Vec3Array& reaction);
 
   // Deepest overlap (r_i + r_j - |p_i - p_j|) over the candidate pairs (m).

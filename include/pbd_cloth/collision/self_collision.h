@@ -131,8 +131,8 @@ class SelfCollision {
   // One projection pass, then friction; returns the largest correction. Kinematic particles of a
   // contact get its multiplier times their gradient added to `reaction`
   // (Collisions::kinematicReaction).
-  double project(Particles& particles, double thickness, int substep,
-                 const FrictionConfig& friction, Vec3Array& reaction);
+  double project(Particles& particles, double thickness, int substep, const Friction& friction,
+                 Vec3Array& reaction);
 
   // Candidates more than a few thicknesses apart at a substep's start (their boxes), summed over
   // the substeps since the last call: listed for the motion of their search window, not for their

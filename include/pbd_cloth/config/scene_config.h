@@ -12,13 +12,15 @@
 #include <utility>
 #include <vector>
 
+#include "pbd_cloth/config/obstacle_config.h"
+#include "pbd_cloth/config/robot_model.h"
 #include "pbd_cloth/geometry/pose.h"
-#include "pbd_cloth/geometry/shape_type.h"
+#include "pbd_cloth/solver/solver_settings.h"
 
 namespace pbd_cloth {
 
-class TriangleMesh;  // mesh_shape.h: a loaded mesh shape with its signed-distance queries
-struct ClothMesh;    // mesh_cloth.h: the triangles of cloth.mesh with the file's vertex ids
+struct ClothMesh;  // geometry/polygon_mesh.h: the triangles of cloth.mesh with the file's vertex
+                   // ids
 
 // Upper limit of cloth and granular particle counts: not physics but protection of the process
 // (a typo like rows: 50000, or a 1e9-vertex mesh, would otherwise allocate gigabytes before
@@ -34,90 +36,6 @@ class ConfigError : public std::runtime_error {
 
  private:
   std::string key_;
-};
-
-enum class Method {
-  kVerlet,      // the seed: Verlet integration, constraints projected rigidly, relaxation loop
-  kPbd,         // Mueller et al. 2007: stiffness in [0,1], corrected for the iteration count
-  kXpbd,        // Macklin et al. 2016: compliance, one Lagrange multiplier per constraint
-  kMassSpring,  // explicit springs and dampers, symplectic Euler: the penalty baseline
-};
-enum class Ordering { kGaussSeidel, kJacobi };
-
-const char* toString(Method method);
-const char* toString(Ordering ordering);
-
-// Upper limit of solver.substeps, solver.iterations and solver.search_window: not physics, but a
-// typo like substeps: 50000 would otherwise stall the node before anyone sees an error.
-constexpr int kMaxPasses = 1000;
-
-struct SolverConfig {
-  Method method = Method::kXpbd;               // solver.method
-  int substeps = 10;                           // solver.substeps, per step
-  int iterations = 1;                          // solver.iterations, passes per substep
-  double tolerance = 0.0;                      // solver.tolerance (m); > 0: adaptive
-  Ordering ordering = Ordering::kGaussSeidel;  // solver.ordering
-  double relaxation = 1.0;                     // solver.relaxation, Jacobi factor in (0,2)
-  bool jacobi_averaging = true;                // solver.jacobi_averaging (eq. 48 survey)
-  Eigen::Vector3d gravity{0.0, 0.0, -9.81};    // solver.gravity (m/s^2)
-  double damping = 0.0;                        // solver.damping (1/s)
-  double stretch_stiffness = 1.0;              // solver.stretch_stiffness, pbd only, [0,1]
-  double bend_stiffness = 0.1;                 // solver.bend_stiffness, pbd only, [0,1]
-  double spring_stiffness = 1.0e4;             // solver.spring_stiffness (N/m), mass_spring
-  double spring_damping = 0.0;                 // solver.spring_damping (N s/m), mass_spring
-  // 0.01: on the 50 x 50 hanging cloth 1.0 already diverges at 240 substeps (scripts/method_table).
-  double bend_spring_stiffness = 0.01;  // solver.bend_spring_stiffness, mass_spring
-  // solver.levels: levels of long-range links of the grid cloth's stretch solve (coarse_levels.h,
-  // after hierarchical PBD), each pass coarsest first. 0 = off (the default). Grid cloth and zero
-  // stretch compliance only: the links are inextensible.
-  int levels = 0;
-  // solver.max_speed (m/s): a free particle faster than this after a step means the step blew up
-  // (its kinetic energy m v^2 / 2 per particle is out of bounds). Where fault recovery is on (the
-  // node), that step is undone: Simulation::step, "Faults". Nothing a robot handles moves a cloth
-  // at 100 m/s; a gripper jumping 1 m in one 60 Hz step drags its neighbours at about 60 m/s.
-  double max_speed = 100.0;
-  // solver.simd: project the stretch links four at a time with AVX2 where the processor has it,
-  // eight at a time with AVX-512 where it has that (stretch_links.h; bit-identical to the
-  // portable loop). false: always the portable loop.
-  bool simd = true;
-  // solver.avx512: false keeps the stretch links and the flat hinges at AVX2 on a processor with
-  // AVX-512 (the same results to the bit; for comparing the two, doc/performance.md "Eight links
-  // a register" and "Flat hinges through masked accesses").
-  bool avx512 = true;
-  // solver.threads: threads that step the cloth (the calling one included): the stretch links of
-  // a grid of 32 rows or more in blocks (stretch_links.h), prediction and velocity update in
-  // ranges of particles. Bit-identical results for every count. 1 by default: a robot's computer
-  // runs more than this node, and a spinning worker competes with it (doc/performance.md,
-  // "Threads").
-  int threads = 1;
-  // solver.adaptive_threads: with threads > 1, run a step on the calling thread alone while that is
-  // measured to be faster (another process holds a core), trying all threads again now and then
-  // (thread_choice.h). The same results either way: the partition of the work does not change.
-  bool adaptive_threads = true;
-  // solver.taut_chains: a grid row or column of inextensible links whose two kinematic ends are as
-  // far apart as its rest lengths add up to (the top row of a cloth pinned at both top corners)
-  // is held straight, its one possible shape, instead of being swept towards it (taut_chains.h).
-  // Only while the links are inextensible: cloth.stretch_compliance 0, and not pbd with
-  // solver.stretch_stiffness < 1 nor mass_spring; and not with cloth.tethers, which hold such a
-  // chain already (each of its particles is tethered to both ends).
-  bool taut_chains = true;
-  // solver.search_window: substeps one contact search (particle-particle and self-collision
-  // candidates) covers. 0 (the default): chosen per step from the last one's candidates
-  // (Collisions, "search window"); k >= 1: every k substeps, a search more wherever a particle
-  // leaves its motion bounds; k >= substeps: once per step.
-  int search_window = 0;
-  // solver.sleep_speed (m/s) and solver.sleep_time (s): when every free particle has moved slower
-  // than sleep_speed for sleep_time (stayed within sleep_speed x sleep_time of where it was when
-  // that time began), the scene sleeps: steps cost a check instead of a solve until something
-  // could move it (Simulation::step, "Sleeping"). 0 = never sleeps (the default,
-  // so benchmarks and accuracy tests always solve).
-  double sleep_speed = 0.0;
-  double sleep_time = 0.5;
-};
-
-struct FrictionConfig {
-  double static_coefficient = 0.5;   // cloth.friction.static (mu_s)
-  double kinetic_coefficient = 0.4;  // cloth.friction.kinetic (mu_k), <= mu_s
 };
 
 struct ClothConfig {
@@ -147,6 +65,11 @@ struct ClothConfig {
   int shear_diagonals = 1;
 };
 
+// What the solver reads of the cloth's configuration (Solver::configure).
+inline ClothMaterial clothMaterial(const ClothConfig& cloth) {
+  return ClothMaterial{cloth.stretch_compliance, cloth.bend_compliance, cloth.spacing};
+}
+
 struct GranularConfig {
   int count = 0;                              // granular.count
   double radius = 0.01;                       // granular.radius (m)
@@ -166,71 +89,6 @@ struct GripperConfig {
   double radius = 0.02;              // grippers[i].radius (m)
   std::string tf_frame;              // grippers[i].tf_frame
   std::vector<Waypoint> trajectory;  // grippers[i].trajectory
-};
-
-const char* toString(ShapeType shape);
-
-// One collision shape: an obstacle of the scene, or one <collision> element of a robot link (then
-// `pose` is the element's origin in the link frame and `name` is "<link>/<index>").
-struct ObstacleConfig {
-  std::string name;                      // obstacles[i].name
-  ShapeType shape = ShapeType::kSphere;  // obstacles[i].shape
-  double radius = 0.1;                   // sphere, capsule, cylinder
-  Eigen::Vector3d size{1.0, 1.0, 1.0};   // box: full edge lengths
-  double length = 0.5;  // capsule: between the end-sphere centres; cylinder: height
-  Eigen::Vector3d normal{0.0, 0.0, 1.0};  // plane: unit normal
-  double offset = 0.0;                    // plane: free side is n.p - offset >= 0
-  std::string mesh;                       // mesh: file path, file:// or package:// URI
-  Eigen::Vector3d scale{1.0, 1.0, 1.0};   // mesh: per-axis scale applied at load
-  // mesh: the loaded, scaled mesh with its distance structure (scene reader: scene_assets.h).
-  // Shared: copies of the scene (reset, live tuning) do not copy the mesh.
-  std::shared_ptr<const TriangleMesh> mesh_data;
-  Pose pose;             // obstacles[i].pose
-  std::string tf_frame;  // obstacles[i].tf_frame: follow this frame (node)
-  double padding = 0.0;  // m added around the shape (robot links: robot.padding)
-  // Friction of contacts with this shape; cloth.friction when not set (robot links:
-  // robot.friction).
-  bool has_friction = false;
-  FrictionConfig friction;
-};
-
-enum class JointType { kFixed, kRevolute, kContinuous, kPrismatic, kFloating, kPlanar };
-
-// A joint of the URDF's kinematic tree (floating and planar joints are held at their origin).
-struct RobotJoint {
-  std::string name;
-  JointType type = JointType::kFixed;
-  int parent_link = -1;  // index into RobotModel::links
-  int child_link = -1;
-  Pose origin;                          // child joint frame in the parent link frame at position 0
-  Eigen::Vector3d axis{1.0, 0.0, 0.0};  // unit, in the joint frame
-  double lower = 0.0, upper = 0.0;      // limits (revolute, prismatic); not enforced by FK
-  int mimic_joint = -1;                 // position = multiplier * mimicked + offset
-  double mimic_multiplier = 1.0, mimic_offset = 0.0;
-};
-
-struct RobotLink {
-  std::string name;
-  // Every <collision> element of the link, in file order; pose = its origin in the link frame.
-  std::vector<ObstacleConfig> collisions;
-  int parent_joint = -1;  // -1 for the root link
-};
-
-// The URDF as the simulation needs it: links with their collision shapes and the joint tree.
-// Filled by the scene reader (scene_assets.h); forward kinematics in robot_model.cpp (core).
-struct RobotModel {
-  std::string name;
-  std::vector<RobotLink> links;
-  std::vector<RobotJoint> joints;
-  int root_link = -1;
-
-  int linkIndex(const std::string& link) const;    // -1 when absent
-  int jointIndex(const std::string& joint) const;  // -1 when absent
-  // Pose of every link in the scene frame with the root link at `root_pose`, for joint positions
-  // indexed like `joints` (fixed joints ignore theirs; mimic joints follow their joint). `out` is
-  // resized to links.size().
-  void linkPoses(const Pose& root_pose, const std::vector<double>& joint_positions,
-                 std::vector<Pose>& out) const;
 };
 
 struct JointWaypoint {

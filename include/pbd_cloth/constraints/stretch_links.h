@@ -124,7 +124,8 @@ struct StretchPassResult {
 // The particles' positions as three columns, x[p], y[p] and z[p] (a structure of arrays), the
 // form the projection works on: four consecutive particles' x (or y, or z) are one register load,
 // where Vec3Array's interleaved x0 y0 z0 x1 ... needs three loads and six shuffles for four
-// particles' coordinates, and as many to store them (doc/performance.md, "Positions in columns").
+// particles' coordinates, and as many to store them (doc/journal.md, "2026-11-29: Positions in
+// columns").
 struct PositionColumns {
   double* x = nullptr;
   double* y = nullptr;

@@ -5,7 +5,7 @@
 // has exactly one shape that satisfies its links, the straight one. Its particles are held there,
 // as kinematic particles for the step, instead of being left to a Gauss-Seidel sweep that can
 // only approach that shape (the stretch along an exactly taut row falls with the square of its
-// sag, so each pass removes little of it: doc/performance.md, "Taut chains held straight").
+// sag, so each pass removes little of it: doc/journal.md, "2026-12-06: Taut chains held straight").
 // Ends pulled farther apart than the rest lengths allow hold the chain straight and evenly
 // stretched, the least-squares answer of links that cannot all be met.
 #pragma once

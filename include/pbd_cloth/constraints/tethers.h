@@ -8,7 +8,8 @@
 // along the mesh edges for a mesh), not one to every anchor: the other anchors of a group move with
 // it (one gripper, one fixed edge), and the cloth's own links keep the particle's place relative to
 // them. A gripper holding 6 particles used to give every particle 6 tethers, a pinned edge of 50
-// particles 50, each a projection per pass (README, "Choosing a method").
+// particles 50, each a projection per pass (doc/journal.md, "2026-11-26: Tethers go to the nearest
+// anchor of each group").
 #pragma once
 
 #include <utility>

@@ -50,7 +50,7 @@ class TriangleMesh {
   const std::vector<Triangle>& triangles() const { return triangles_; }
   const Vec3& boundsMin() const { return lo_; }
   const Vec3& boundsMax() const { return hi_; }
-  // Bytes held by vertices, triangles, normals and the tree (README figure).
+  // Bytes held by vertices, triangles, normals and the tree (doc/scenes.md "Shapes").
   std::size_t memoryBytes() const;
 
  private:

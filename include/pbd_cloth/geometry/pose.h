@@ -35,6 +35,10 @@ struct Frame {
   Vec3 toWorld(const Vec3& x) const { return rotation * x + translation; }
 };
 
+// Rotation from roll, pitch and yaw (cloth.rpy): roll about x, then pitch about y, then yaw about
+// z, R = Rz(yaw) Ry(pitch) Rx(roll).
+Eigen::Matrix3d rotationFromRpy(const Eigen::Vector3d& rpy);
+
 Frame frameFromPose(const Pose& pose);
 // Pose at fraction s of the motion a -> b: linear position, slerp orientation (of the normalised
 // quaternions, unlike interpolate: a frame must be a rotation whatever the poses' lengths).

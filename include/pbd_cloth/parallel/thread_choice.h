@@ -5,10 +5,10 @@
 // cores, and a worker that the scheduler takes off its core in the middle of its share keeps the
 // calling thread waiting for the rest of that share until it runs again; on this project's
 // two-core machine, with a busy loop beside it, fabric_table took 0.52-0.68 ms a step on two
-// threads against 0.50-0.51 ms on one (doc/performance.md, "Threads beside a busy process").
-// The partition of the work into tasks does not change with the choice (WorkerPool::setSolo runs
-// every index of a job on the calling thread, in order), so results stay bit-identical whichever
-// is chosen, and the choice may change at any step.
+// threads against 0.50-0.51 ms on one (doc/journal.md, "2026-11-29: Threads beside a busy process:
+// `solver.adaptive_threads`"). The partition of the work into tasks does not change with the choice
+// (WorkerPool::setSolo runs every index of a job on the calling thread, in order), so results stay
+// bit-identical whichever is chosen, and the choice may change at any step.
 //
 // How: the step runs in its preferred mode and now and then, for kProbeSteps steps, in the other
 // one (the first of them a warm-up: workers asleep after a solo stretch wake up, caches refill).

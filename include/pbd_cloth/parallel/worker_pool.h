@@ -11,10 +11,11 @@
 // 0, by the caller: a worker that has not woken by then (it slept through a long serial part of
 // the step, such as a garment's self-contacts) no longer holds the caller up for its wake-up, which
 // costs more than a small job itself (on the T-shirt, two threads, 4.4 % of the samples were the
-// caller waiting here: doc/performance.md, "A worker's share run by the caller"). Which work an
-// index does never changes, only which thread runs it, and the indices of one job are independent
-// by contract, so results stay the same. A worker runs only an index opened for the generation it
-// saw, so one started by a new thread count does not run the last job again.
+// caller waiting here: doc/journal.md, "2026-11-28: A worker's share run by the caller, and a
+// resize that crashed"). Which work an index does never changes, only which thread runs it, and the
+// indices of one job are independent by contract, so results stay the same. A worker runs only an
+// index opened for the generation it saw, so one started by a new thread count does not run the
+// last job again.
 //
 // Solo (setSolo, solver.adaptive_threads: thread_choice.h): the calling thread runs every index of
 // each job itself, in order, and the workers are not woken (they sleep after their spin). The

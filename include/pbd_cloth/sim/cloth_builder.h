@@ -2,25 +2,11 @@
 // stretch constraints, bending hinges, triangles) and the granular particles.
 #pragma once
 
+#include "pbd_cloth/config/cloth_placement.h"
 #include "pbd_cloth/config/scene_config.h"
 #include "pbd_cloth/model/particles.h"
 
 namespace pbd_cloth {
-
-// Rotation of the grid from cloth.rpy (roll about x, then pitch about y, then yaw about z).
-Eigen::Matrix3d rotationFromRpy(const Eigen::Vector3d& rpy);
-
-// Where the cloth starts, with `rotation` = rotationFromRpy(cloth.rpy): grid particle (r, c) at
-// origin + R (c s, -r s, 0), and a mesh vertex (file units) at origin + R (mesh_scale v). The
-// builder places the particles there and validate() checks them against the bounds.
-inline Vec3 gridStartPosition(const ClothConfig& cloth, const Eigen::Matrix3d& rotation, int r,
-                              int c) {
-  return cloth.origin + rotation * Vec3(c * cloth.spacing, -r * cloth.spacing, 0.0);
-}
-inline Vec3 meshStartPosition(const ClothConfig& cloth, const Eigen::Matrix3d& rotation,
-                              const Vec3& vertex) {
-  return cloth.origin + rotation * (cloth.mesh_scale * vertex);
-}
 
 // Fills `particles` (cloth grid, then granular lattice) and `topology` from the scene. Pinned
 // particles get inverse mass 0.

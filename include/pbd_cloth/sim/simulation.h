@@ -86,7 +86,7 @@ class Simulation {
   int obstacleIndex(const std::string& name) const;
   int obstacleCount() const { return static_cast<int>(scene_.obstacles.size()); }
   // The obstacle as it stands now (pose at the end of the last step).
-  const ObstacleConfig& obstacle(int obstacle) const { return collisions_.obstacles()[obstacle]; }
+  const Collider& obstacle(int obstacle) const { return collisions_.obstacles()[obstacle]; }
   // The pose the obstacle reaches at the end of the next step (moved as a kinematic body). A
   // pose with a poseProblem() is refused (false).
   bool setObstaclePose(int obstacle, const Pose& pose);

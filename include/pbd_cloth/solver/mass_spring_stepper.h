@@ -4,8 +4,8 @@
 #pragma once
 
 #include "pbd_cloth/collision/collisions.h"
-#include "pbd_cloth/config/scene_config.h"
 #include "pbd_cloth/model/particles.h"
+#include "pbd_cloth/solver/solver_settings.h"
 #include "pbd_cloth/solver/solver_terms.h"
 
 namespace pbd_cloth {

@@ -10,7 +10,6 @@
 #include <vector>
 
 #include "pbd_cloth/collision/collisions.h"
-#include "pbd_cloth/config/scene_config.h"
 #include "pbd_cloth/constraints/coarse_levels.h"
 #include "pbd_cloth/constraints/flat_hinges.h"
 #include "pbd_cloth/constraints/stretch_links.h"
@@ -18,6 +17,7 @@
 #include "pbd_cloth/parallel/thread_choice.h"
 #include "pbd_cloth/parallel/worker_pool.h"
 #include "pbd_cloth/solver/mass_spring_stepper.h"
+#include "pbd_cloth/solver/solver_settings.h"
 #include "pbd_cloth/solver/solver_terms.h"
 
 namespace pbd_cloth {
@@ -56,7 +56,7 @@ struct StepStats {
 
 class Solver {
  public:
-  void configure(const SolverConfig& solver, const ClothConfig& cloth);
+  void configure(const SolverConfig& solver, const ClothMaterial& cloth);
   const SolverConfig& config() const { return config_; }
   // Sizes every buffer for these particles and constraints; call after the topology changes.
   void prepare(const Particles& particles, const ClothTopology& topology);

@@ -31,7 +31,8 @@
 #include <string>
 #include <vector>
 
-#include "pbd_cloth/config/scene_config.h"
+#include "pbd_cloth/collision/collider_snapshot.h"
+#include "pbd_cloth/geometry/pose.h"
 #include "pbd_cloth/model/particles.h"
 
 namespace pbd_cloth {
@@ -45,24 +46,6 @@ struct GripperSnapshot {
   Vec3Array grasp_offsets;   // their positions in the gripper frame, one per grasped index
   Vec3 velocity = Vec3::Zero();   // m/s over the last step
   std::size_t next_waypoint = 0;  // first trajectory waypoint whose grasp event is pending
-};
-
-// A collider (obstacle or robot link collision element) or a robot link.
-struct BodySnapshot {
-  std::string name;
-  Pose pose;    // at the state's time
-  Pose target;  // where the next step takes it
-  bool enabled = true;
-  bool live = false;            // robot links: posed by input, no longer by joint_trajectory
-  bool jump_to_target = false;  // colliders: enabled again, placed at the next target unswept
-};
-
-struct MeshContactCache {
-  int particle = 0;
-  int collider = 0;
-  int triangle = -1;      // closest triangle of the last query
-  double distance = 0.0;  // the distance found (m), and where (collider frame)
-  Vec3 point = Vec3::Zero();
 };
 
 struct SimulationState {

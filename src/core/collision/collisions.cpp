@@ -5,8 +5,6 @@
 #include <cmath>
 #include <limits>
 
-#include "pbd_cloth/sim/colliders.h"
-
 namespace pbd_cloth {
 
 namespace {
@@ -25,21 +23,21 @@ constexpr double kBoxSlack = 0.5;
 // substeps) per particle and search, and doubles below the second. Chosen on the drape from
 // 32 x 32 to 128 x 128 and fabric_table: 1 and 1/4 kept windows too long on the drape (64 x 64:
 // 21.8 against 18.0 ms a step with these), fabric_table keeps the whole step with any of them
-// (doc/performance.md, "Search windows").
+// (doc/journal.md, "Search windows").
 constexpr double kWindowHalves = 0.1;
 constexpr double kWindowDoubles = 0.025;
 // The obstacles' first pass culls particles in blocks of this many consecutive indices (part of a
 // grid's row) before it culls them one by one: an obstacle that a block's paths keep out of costs
 // the block one box test instead of one per particle (a robot's links, far from most of the
-// cloth: doc/performance.md, "Obstacles culled in blocks").
+// cloth: doc/journal.md, "2026-11-28: Obstacles culled in blocks").
 constexpr int kCullBlock = 32;
 // A local search (Collisions::searchNear) for at most this many leavers per 1024 particles; more,
 // and a whole search costs less: each leaver renews its leaves, refits their paths to the root and
 // traverses them against the tree, several times a whole search's cost per particle. 32 rather
 // than 64: the drape 1.49 to 1.34 ms a step, the drape tiled to 128 x 128 18.8 to 14.5 ms, the
 // rest the same; with 16 and 24 three particles of the resting T-shirt took turns moving a few
-// micrometres a step, which kept it awake while sleep went by velocity. doc/performance.md,
-// "Local searches" and "Sleeping".
+// micrometres a step, which kept it awake while sleep went by velocity. doc/journal.md,
+// "2026-11-27: Local searches" and "Sleeping".
 constexpr int kMaxLocalLeavers = 32;
 int mostLocalLeavers(int particles) { return kMaxLocalLeavers * particles / 1024; }
 
@@ -57,13 +55,13 @@ bool boxesApart(const Eigen::Array3d& a_lo, const Eigen::Array3d& a_hi, const Ve
 
 }  // namespace
 
-void Collisions::configure(const SceneConfig& scene) {
-  bounds_ = scene.bounds;
-  friction_ = scene.cloth.friction;
-  thickness_ = scene.cloth.thickness;
-  self_collision_ = scene.cloth.self_collision;
-  gravity_ = scene.solver.gravity;
-  path_box_kernel_ = bestPathBoxKernel(scene.solver.simd, scene.solver.avx512);
+void Collisions::configure(const CollisionSettings& settings) {
+  bounds_ = settings.bounds;
+  friction_ = settings.friction;
+  thickness_ = settings.thickness;
+  self_collision_ = settings.self_collision;
+  gravity_ = settings.gravity;
+  path_box_kernel_ = bestPathBoxKernel(settings.simd, settings.avx512);
   obstacles_.clear();
   obstacle_targets_.clear();
   shapes_.clear();
@@ -77,18 +75,14 @@ void Collisions::configure(const SceneConfig& scene) {
   bound_radius_.clear();
   obstacle_lo_.clear();
   obstacle_hi_.clear();
-  for (const auto& obstacle : scene.obstacles) addCollider(obstacle);
+  for (const Collider& collider : settings.colliders) addCollider(collider);
 }
 
-int Collisions::addCollider(const ObstacleConfig& collider) {
+int Collisions::addCollider(const Collider& collider) {
   ++collider_changes_;
-  if (collider.shape == ShapeType::kMesh && !collider.mesh_data) {
-    throw ConfigError(collider.name + ".mesh",
-                      "the mesh '" + collider.mesh + "' is not loaded (scene_assets.h loadMesh)");
-  }
   obstacles_.push_back(collider);
   obstacle_targets_.push_back(collider.pose);
-  shapes_.push_back(makeShape(collider));
+  shapes_.push_back(collider.shape);
   obstacle_friction_.push_back(collider.has_friction ? collider.friction : friction_);
   enabled_.push_back(1);
   teleport_.push_back(0);
@@ -105,7 +99,7 @@ int Collisions::addCollider(const ObstacleConfig& collider) {
   return static_cast<int>(obstacles_.size()) - 1;
 }
 
-void Collisions::setFriction(const FrictionConfig& friction) {
+void Collisions::setFriction(const Friction& friction) {
   friction_ = friction;
   for (std::size_t k = 0; k < obstacles_.size(); ++k) {
     if (!obstacles_[k].has_friction) obstacle_friction_[k] = friction;
@@ -383,9 +377,9 @@ double Collisions::project(Particles& particles, const ClothTopology& topology) 
                             : 0;
     if ((particle_contacts || self_collision) && (window_over || leavers > 0)) {
       // A few cloth particles off their bounds search again alone (a pass over the cloth for
-      // each would make the searches of a step grow with the cloth: doc/performance.md, "Local
-      // searches"); many, a new window, or particle-particle contacts, whose broad phase has no
-      // local form, the whole search.
+      // each would make the searches of a step grow with the cloth: doc/journal.md, "2026-11-27:
+      // Local searches"); many, a new window, or particle-particle contacts, whose broad phase has
+      // no local form, the whole search.
       if (!window_over && self_collision && !particle_contacts &&
           leavers <= mostLocalLeavers(particles.size())) {
         searchNear(particles, topology);

@@ -123,8 +123,8 @@ void ParticleContacts::measureAllowances(const Particles& p, const Vec3Array& x,
   }
 }
 
-double ParticleContacts::project(Particles& p, int substep, int step,
-                                 const FrictionConfig& friction, Vec3Array& reaction) {
+double ParticleContacts::project(Particles& p, int substep, int step, const Friction& friction,
+                                 Vec3Array& reaction) {
   double max_change = 0.0;
   for (ParticlePair& pair : pairs_) {
     const int i = pair.i, j = pair.j;

@@ -641,8 +641,8 @@ void SelfCollision::measureAllowances(const Vec3Array& x, double thickness, doub
   }
 }
 
-double SelfCollision::project(Particles& p, double thickness, int substep,
-                              const FrictionConfig& friction, Vec3Array& reaction) {
+double SelfCollision::project(Particles& p, double thickness, int substep, const Friction& friction,
+                              Vec3Array& reaction) {
   double max_change = 0.0;
   for (SelfContactPair& pair : pairs_) {
     ContactState& state = pair.state;

@@ -4,8 +4,8 @@
 // with everything and would otherwise slip through a range test.
 #include "pbd_cloth/config/scene_config.h"
 
-#include "pbd_cloth/sim/cloth_builder.h"
-#include "pbd_cloth/sim/mesh_cloth.h"
+#include "pbd_cloth/config/cloth_placement.h"
+#include "pbd_cloth/geometry/polygon_mesh.h"
 
 #include <cctype>
 #include <cmath>
@@ -15,30 +15,6 @@
 #include <sstream>
 
 namespace pbd_cloth {
-
-const char* toString(Method method) {
-  switch (method) {
-    case Method::kVerlet:
-      return "verlet";
-    case Method::kPbd:
-      return "pbd";
-    case Method::kXpbd:
-      return "xpbd";
-    case Method::kMassSpring:
-      return "mass_spring";
-  }
-  return "unknown";
-}
-
-const char* toString(Ordering ordering) {
-  switch (ordering) {
-    case Ordering::kGaussSeidel:
-      return "gauss_seidel";
-    case Ordering::kJacobi:
-      return "jacobi";
-  }
-  return "unknown";
-}
 
 const char* toString(ShapeType shape) {
   switch (shape) {

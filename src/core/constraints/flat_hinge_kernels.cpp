@@ -86,7 +86,7 @@ struct Avx2Xyz {
 
 // AVX-512VL: one masked access of three lanes each way, where AVX2 needs two and a shuffle. The
 // pass reads 4 corners and writes 4 a hinge, and those accesses and the instructions around them,
-// not its arithmetic, bound it (doc/performance.md, "Flat hinges through masked accesses").
+// not its arithmetic, bound it (doc/journal.md, "2026-11-29: Flat hinges through masked accesses").
 struct Avx512VlXyz {
   static constexpr __mmask8 kXyz = 0x7;
   PBD_AVX512VL static void load(const double* p, __m256d& v) { v = _mm256_maskz_loadu_pd(kXyz, p); }

@@ -9,6 +9,13 @@ Pose interpolate(const Pose& a, const Pose& b, double s) {
   return out;
 }
 
+Eigen::Matrix3d rotationFromRpy(const Eigen::Vector3d& rpy) {
+  return (Eigen::AngleAxisd(rpy.z(), Eigen::Vector3d::UnitZ()) *
+          Eigen::AngleAxisd(rpy.y(), Eigen::Vector3d::UnitY()) *
+          Eigen::AngleAxisd(rpy.x(), Eigen::Vector3d::UnitX()))
+      .toRotationMatrix();
+}
+
 Frame frameFromPose(const Pose& pose) {
   Frame frame;
   frame.rotation = pose.orientation.normalized().toRotationMatrix();

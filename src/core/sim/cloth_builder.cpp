@@ -12,13 +12,6 @@
 
 namespace pbd_cloth {
 
-Eigen::Matrix3d rotationFromRpy(const Eigen::Vector3d& rpy) {
-  return (Eigen::AngleAxisd(rpy.z(), Eigen::Vector3d::UnitZ()) *
-          Eigen::AngleAxisd(rpy.y(), Eigen::Vector3d::UnitY()) *
-          Eigen::AngleAxisd(rpy.x(), Eigen::Vector3d::UnitX()))
-      .toRotationMatrix();
-}
-
 namespace {
 
 // Cotangent of the angle between a and b; 0 for a degenerate angle (the hinge is then skipped).

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <string>
 
+#include "pbd_cloth/sim/colliders.h"
 #include "pbd_cloth/sim/live_pose.h"
 
 namespace pbd_cloth {
@@ -39,7 +40,7 @@ void RobotLinks::build(const RobotConfig& robot, Collisions& collisions) {
     for (const ObstacleConfig& element : model.links[l].collisions) {
       ObstacleConfig collider = element;
       collider.pose = link.pose.compose(element.pose);
-      collisions.addCollider(collider);
+      collisions.addCollider(makeCollider(collider));
       ++link.collider_count;
     }
   }

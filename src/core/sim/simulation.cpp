@@ -47,9 +47,9 @@ void Simulation::findStartWarnings() {
 void Simulation::build() {
   buildScene(scene_, particles_, topology_);
   initial_particles_ = particles_;
-  collisions_.configure(scene_);
+  collisions_.configure(collisionSettings(scene_));
   links_.build(scene_.robot, collisions_);
-  solver_.configure(scene_.solver, scene_.cloth);
+  solver_.configure(scene_.solver, clothMaterial(scene_.cloth));
   solver_.prepare(particles_, topology_);
   collisions_.prepare(particles_, topology_);
   taut_chains_.build(particles_, topology_);
@@ -172,7 +172,7 @@ void Simulation::setSolverConfig(const SolverConfig& solver) {
   candidate.solver = solver;
   validate(candidate);
   scene_.solver = solver;
-  solver_.configure(scene_.solver, scene_.cloth);
+  solver_.configure(scene_.solver, clothMaterial(scene_.cloth));
   wake();  // gravity, damping or the solve changed: the rest state may no longer be one
 }
 
@@ -192,7 +192,7 @@ void Simulation::setClothCompliance(double stretch_compliance, double bend_compl
     buildBending(initial_particles_.position, topology_);
     solver_.prepare(particles_, topology_);
   }
-  solver_.configure(solver_.config(), scene_.cloth);
+  solver_.configure(solver_.config(), clothMaterial(scene_.cloth));
 }
 
 void Simulation::setFriction(const FrictionConfig& friction) {
@@ -200,7 +200,7 @@ void Simulation::setFriction(const FrictionConfig& friction) {
   candidate.cloth.friction = friction;
   validate(candidate);
   scene_.cloth.friction = friction;
-  collisions_.setFriction(friction);
+  collisions_.setFriction(toFriction(friction));
   wake();  // less friction may let a cloth at rest slide
 }
 
@@ -235,8 +235,8 @@ void Simulation::updateKinematicTargets(double dt) {
   // held: each is tethered to both ends, and the two tethers' spheres meet only at its place on
   // the segment. Holding them as kinematic particles as well changed nothing there but the
   // order of the sweep's corrections, and that for the worse: config/hanging.yaml at rest ended
-  // at 0.12 % strain (compression next to its side edges) against 0.0042 % (doc/performance.md,
-  // "Taut chains held straight").
+  // at 0.12 % strain (compression next to its side edges) against 0.0042 % (doc/journal.md,
+  // "2026-12-06: Taut chains held straight").
   if (scene_.solver.taut_chains && !scene_.cloth.tethers && chainsInextensible()) {
     taut_chains_.hold(particles_);
   } else {

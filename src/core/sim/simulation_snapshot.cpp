@@ -73,7 +73,7 @@ void Simulation::getState(SimulationState& state) const {
     to.velocity = from.velocity;
     to.next_waypoint = from.next_waypoint;
   }
-  const std::vector<ObstacleConfig>& colliders = collisions_.obstacles();
+  const std::vector<Collider>& colliders = collisions_.obstacles();
   state.colliders.resize(colliders.size());
   for (std::size_t k = 0; k < colliders.size(); ++k) {
     state.colliders[k] = BodySnapshot();
@@ -143,7 +143,7 @@ std::string Simulation::checkState(const SimulationState& state) const {
   }
   if (!error.empty()) return error;
 
-  const std::vector<ObstacleConfig>& colliders = collisions_.obstacles();
+  const std::vector<Collider>& colliders = collisions_.obstacles();
   error = checkCount("colliders", state.colliders.size(), colliders.size(),
                      "obstacles and robot collision elements");
   for (std::size_t k = 0; error.empty() && k < state.colliders.size(); ++k) {
@@ -165,7 +165,7 @@ std::string Simulation::checkState(const SimulationState& state) const {
     if (cache.particle < 0 || cache.particle >= static_cast<int>(n)) {
       error = field + ".particle: " + std::to_string(cache.particle) + " is not a particle";
     } else if (cache.collider < 0 || cache.collider >= static_cast<int>(colliders.size()) ||
-               colliders[cache.collider].shape != ShapeType::kMesh) {
+               colliders[cache.collider].shape.type != ShapeType::kMesh) {
       error = field + ".collider: " + std::to_string(cache.collider) + " is not a mesh collider";
     } else if (!std::isfinite(cache.distance) || !cache.point.allFinite()) {
       error = field + ": not finite";

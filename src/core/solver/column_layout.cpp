@@ -8,7 +8,8 @@ namespace pbd_cloth {
 // Seidel. Its positions, velocities and substep starts then stay in columns for the whole step
 // (stateToColumns before the first prediction, stateFromColumns after the last update), where
 // otherwise every pass copies the positions into the columns and back around the sweep: 13.5 % of
-// the 100 x 100 swinging cloth's step (doc/performance.md, "A step of links alone, in columns").
+// the 100 x 100 swinging cloth's step (doc/journal.md, "2026-12-06: A step of links alone, in
+// columns").
 bool Solver::linksAlone(const Particles& p, const ClothTopology& topology,
                         const Collisions& collisions) const {
   return config_.method != Method::kMassSpring && config_.ordering != Ordering::kJacobi &&

@@ -10,7 +10,7 @@
 
 namespace pbd_cloth {
 
-void Solver::configure(const SolverConfig& solver, const ClothConfig& cloth) {
+void Solver::configure(const SolverConfig& solver, const ClothMaterial& cloth) {
   config_ = solver;
   if (pool_.threads() != config_.threads) {
     pool_.resize(config_.threads);

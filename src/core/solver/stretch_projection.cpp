@@ -48,7 +48,7 @@ double Solver::projectStretch(double h, Particles& p, const ClothTopology& topol
     // The sweep works on the positions in columns (stretch_links.h, PositionColumns): copied in
     // and back out around it, which costs a small part of what the columns save the sweep. The
     // copies run on this thread: with solver.threads 2 one more meeting of the threads for each
-    // cost more than the half copy it saved (doc/performance.md, "Positions in columns").
+    // cost more than the half copy it saved (doc/journal.md, "2026-11-29: Positions in columns").
     // In a step of links alone they are there already (linksAlone).
     double* x = p.position.front().data();
     const PositionColumns columns = link_positions_.columns();

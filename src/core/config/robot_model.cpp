@@ -2,10 +2,10 @@
 // parent joint's origin and motion. Called every step, so it allocates nothing once `out` has its
 // size, and it does not rely on the link order: each link walks up its own chain to the root
 // (n links x depth compositions: a few dozen for an arm, cheaper than keeping a visit order).
+#include "pbd_cloth/config/robot_model.h"
+
 #include <Eigen/Geometry>
 #include <stdexcept>
-
-#include "pbd_cloth/config/scene_config.h"
 
 namespace pbd_cloth {
 namespace {
