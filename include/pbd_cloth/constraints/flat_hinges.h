@@ -1,8 +1,8 @@
 // The projection of the flat bending hinges (every hinge of a grid cloth), on flat arrays: the
 // vector constraint C = scale b, b = sum_k K_k x_k (the isometric bending of Bergou et al. 2006 as
-// a linear constraint; solver.cpp, projectBend, says why), with XPBD's multiplier step (Macklin et
-// al. 2016, eq. 18) dlambda = (-k C - alpha~ lambda) / (w + alpha~), w = scale^2 sum_k w_k K_k^2,
-// and each corner moved by w_k K_k scale dlambda.
+// a linear constraint; bend_projection.cpp, projectBend, says why), with XPBD's multiplier step
+// (Macklin et al. 2016, eq. 18) dlambda = (-k C - alpha~ lambda) / (w + alpha~), w = scale^2 sum_k
+// w_k K_k^2, and each corner moved by w_k K_k scale dlambda.
 //
 // Why a file of its own: the hinge's three coordinates go through one 256-bit register (x y z and
 // an unused lane), a third of the scalar loop's arithmetic. As for the stretch links

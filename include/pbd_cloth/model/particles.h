@@ -38,7 +38,7 @@ struct DistanceConstraint {
 // Wardetzky et al. 2007 cotangent weights) on the hinge of two triangles (x0,x1,x2) and (x0,x1,x3)
 // sharing edge x0-x1. The mean-curvature vector b = sum_k K_k x_k vanishes on the flat rest state;
 // the bending energy is E = 3/(A0+A1) |b|^2 = |C|^2 / 2 with the vector constraint C = scale * b =
-// 0, linear in the positions (solver.cpp, projectBend).
+// 0, linear in the positions (bend_projection.cpp, projectBend).
 struct BendConstraint {
   int index[4] = {0, 0, 0, 0};
   double weight[4] = {0.0, 0.0, 0.0, 0.0};  // K_k, sum zero
@@ -57,8 +57,8 @@ inline bool joinsKinematicToFree(const BendConstraint& con, const double* invers
 // mean-curvature vector b0, stored as its components in the frames of the hinge's two triangles
 // (edge direction, in-plane normal to the edge, triangle normal). The projection asks for
 // C = scale (b - b0'), b0' = the mean of b0 carried along by either triangle's current frame, so
-// a curved or folded hinge keeps its rest angle however the cloth moves (solver.cpp, projectBend).
-// Flat hinges (every hinge of the grid) have none and keep C = scale b.
+// a curved or folded hinge keeps its rest angle however the cloth moves (bend_projection.cpp,
+// projectBend). Flat hinges (every hinge of the grid) have none and keep C = scale b.
 struct BendRest {
   bool curved = false;
   Vec3 in_first = Vec3::Zero();   // b0 in the frame of triangle (x0, x1, x2)
