@@ -46,18 +46,10 @@ class CoarseLevels {
   double project(PositionColumns cloth, bool simd, bool track_change, bool avx512);
 
  private:
-  struct Link {
-    int i = 0;  // particle indices in the cloth
-    int j = 0;
-    int local_i = 0;  // positions in the level's list of particles
-    int local_j = 0;
-    double rest_length = 0.0;
-  };
   struct Level {
     std::vector<int> particles;  // cloth indices, row by row
-    std::vector<Link> links;     // row by row
-    // The same links, flat and batched, between positions in `particles`,
-    // projected on a packed copy of those particles' positions and inverse masses.
+    // The level's links, row by row as build() adds them, flat and batched, between positions in
+    // `particles`, projected on a packed copy of those particles' positions and inverse masses.
     StretchLinks flat;
     ColumnPositions compact_position;  // the positions of `particles`, in columns
     std::vector<double> compact_inverse_mass;

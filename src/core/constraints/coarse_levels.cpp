@@ -48,15 +48,12 @@ void CoarseLevels::build(int rows, int cols, double spacing, int levels) {
         level.particles.push_back(cloth(a, b));
       }
     }
+    // The links join positions in the level's own particle list (the packed copy they are
+    // projected on, projectPacked).
+    std::vector<DistanceConstraint> flat;
     auto add = [&](int a0, int b0, int a1, int b1) {
       const double dr = level_rows[a1] - level_rows[a0], dc = level_cols[b1] - level_cols[b0];
-      Link link;
-      link.i = cloth(a0, b0);
-      link.j = cloth(a1, b1);
-      link.local_i = local(a0, b0);
-      link.local_j = local(a1, b1);
-      link.rest_length = spacing * std::sqrt(dr * dr + dc * dc);
-      level.links.push_back(link);
+      flat.push_back({local(a0, b0), local(a1, b1), spacing * std::sqrt(dr * dr + dc * dc)});
     };
     // Row by row from the first (the pinned edge of the shipped scenes), and within a row in runs
     // of links that share no particle, as the cloth's own sweep (cloth_builder.cpp): links of even
@@ -77,11 +74,6 @@ void CoarseLevels::build(int rows, int cols, double spacing, int levels) {
           add(a, b + 1, a + 1, b);
         }
       }
-    }
-    std::vector<DistanceConstraint> flat;
-    flat.reserve(level.links.size());
-    for (const Link& link : level.links) {
-      flat.push_back({link.local_i, link.local_j, link.rest_length});
     }
     level.flat.assign(flat, static_cast<int>(level.particles.size()));
     level.compact_position.resize(static_cast<int>(level.particles.size()));
