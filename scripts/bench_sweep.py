@@ -188,19 +188,11 @@ SWINGING_VARIANTS = {
     # grid has (lines 25, 13, 7, 4, 2).
     'xpbd + levels': (['solver.levels=5'], {'variant': 'levels'},
                       substeps_only([10, 20, 30, 36, 40, 50, 60, 80, 120])),
-    # Fewer levels: with the top row held, 2 levels meet both targets at 34-36 substeps as 5 do,
-    # for less work a substep (single runs, 2026-12-06; doc/journal.md, "2026-12-06: Taut chains held
-    # straight").
+    # Fewer levels, less work a substep. (The top row between the pins is exactly taut here: the
+    # degenerate case. solver.taut_chains, which held it straight, left the product on 2026-12-07,
+    # doc/journal.md; the general case is the `general` sweep.)
     'xpbd + 2 levels': (['solver.levels=2'], {'variant': 'levels_2'},
-                        substeps_only([30, 32, 34, 36, 40])),
-    # The top row between the pinned corners is exactly taut: solver.taut_chains (on by default,
-    # taut_chains.h) holds it straight. Off, the sweep has to pull it straight (what the option
-    # bought: 60 substeps instead of 36 for both targets, doc/methods.md "Taut chains held straight").
-    'xpbd + levels, taut chains off': (['solver.levels=5', 'solver.taut_chains=false'],
-                                       {'variant': 'levels_taut_chains_off'},
-                                       substeps_only([36, 40, 50, 60, 80])),
-    'xpbd, taut chains off': (['solver.taut_chains=false'], {'variant': 'taut_chains_off'},
-                              substeps_only([80, 160, 320])),
+                        substeps_only([34, 40, 60, 80, 120])),
     # The same levels without the AVX2 path (cloth_bench --no-simd, the portable loop every x86-64 and
     # other processors run): what SIMD buys, with bit-identical results.
     'xpbd + levels, portable loop': (['solver.levels=5', 'solver.simd=false'],
@@ -278,20 +270,14 @@ def swinging100_runs(quick):
     else:
         # Neighbouring counts side by side: the strain at the last instant swings between them
         # (doc/journal.md, "Target 2, no longer on its edge"), and the chart shows it.
-        plan = [('xpbd + levels', levels, substeps_only([40, 60, 80, 88, 96, 104, 112, 128, 160])),
-                # solver.taut_chains off (the top row swept straight, not held): the
-                # substeps target 2 needed before the option.
-                ('xpbd + levels, taut chains off', levels + ['solver.taut_chains=false'],
-                 substeps_only([96, 112, 120, 124, 128, 140])),
+        plan = [('xpbd + levels', levels, substeps_only([40, 60, 80, 88, 96, 104, 112, 120, 124,
+                                                          128, 140, 160])),
                 ('xpbd + 4 levels', ['solver.levels=4'], substeps_only([80, 88, 96])),
                 ('xpbd + levels, AVX2 only', levels + ['solver.avx512=false'],
                  substeps_only([96, 128])),
                 ('xpbd + levels, 2 threads', levels + ['solver.threads=2'],
                  substeps_only([60, 80, 96, 120])),
-                # Plain xpbd: with the top row held straight (solver.taut_chains) it meets target
-                # 2 without the levels, at fewer substeps than they need.
                 ('xpbd', [], substeps_only([80, 96, 104, 112, 120, 160, 320])),
-                ('xpbd, taut chains off', ['solver.taut_chains=false'], substeps_only([160, 320])),
                 ('bullet', [], substeps_only([64, 128, 256]) + [(16, 10)])]
     runs = [pbd_run('swinging100', 'swinging.yaml', 'start', 'xpbd', 1, 1, 0.0, grid,
                     level='start')]

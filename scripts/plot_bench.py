@@ -38,9 +38,6 @@ STYLES = [
     # Fewer levels (2 at 50 x 50, 4 at 100 x 100; each chart has one of them).
     ('xpbd + 2 levels', dict(color='seagreen', marker='p')),
     ('xpbd + 4 levels', dict(color='seagreen', marker='p')),
-    # solver.taut_chains=false: the pinned top row swept straight instead of held straight.
-    ('xpbd + levels, taut chains off', dict(color='limegreen', marker='H')),
-    ('xpbd, taut chains off', dict(color='lightskyblue', marker='o')),
     # The same build at solver.avx512=false: four links a register instead of eight.
     ('xpbd + levels, AVX2 only', dict(color='yellowgreen', marker='h')),
     ('xpbd + levels, chebyshev 0.9', dict(color='gold', marker='d')),
@@ -492,8 +489,7 @@ ISSUE_BULLET_MS = {'bullet': 22.2, 'bullet, one diagonal': 16.6}
 
 # Issue 12's targets 1 and 2: ms per step, the fallback the acceptance allows, the grid's side.
 SWING_TARGETS = ((1, 1.6, 5.0, 50), (2, 6.5, 20.0, 100))
-# The curves a target's setting is chosen from, cheapest first: with the top row held straight
-# (solver.taut_chains) plain xpbd meets target 2 at fewer milliseconds than the levels.
+# The curves a target's setting is chosen from, cheapest first.
 SWING_TARGET_CURVES = ('xpbd', 'xpbd + levels', 'xpbd + 2 levels', 'xpbd + 4 levels')
 
 

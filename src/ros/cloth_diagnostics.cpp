@@ -103,7 +103,6 @@ void ClothDiagnostics::simulationStatus(diagnostic_updater::DiagnosticStatusWrap
   status.add("max strain", health_.max_strain);
   status.add("max penetration (m)", health_.max_penetration);
   status.add("degenerate constraints (last step)", health_.degenerate_constraints);
-  status.add("particles held straight (last step; solver.taut_chains)", health_.held_straight);
   status.add("truncated self-collision searches (since last report)", truncated_searches_);
   status.add("steps on the calling thread alone (since last report; solver.adaptive_threads)",
              one_thread_steps_);

@@ -623,7 +623,6 @@ void ClothRos::diagnosticsCallback(const ros::WallTimerEvent& /*event*/) {
   health.max_strain = stats.max_strain;
   health.max_penetration = stats.max_penetration;
   health.degenerate_constraints = static_cast<int>(stats.degenerate_constraints);
-  health.held_straight = static_cast<int>(sim_->tautChains().held().size());
   health.finite = allFinite(sim_->particles());
   health.restored_steps = sim_->faultGuard().restoredSteps();
   if (health.restored_steps > 0) {

@@ -230,6 +230,11 @@ const RemovedKey kRemovedSolverKeys[] = {
     {"simd", "moved to cloth_bench --no-simd (a switch for comparing code paths, not a scene key)"},
     {"avx512",
      "moved to cloth_bench --no-avx512 (a switch for comparing code paths, not a scene key)"},
+    {"taut_chains",
+     "was removed (a special case of one geometry: it held a grid row straight only while its two "
+     "held ends were exactly its rest length apart, so one micrometre of slack turned it off, and "
+     "where it acted it turned a suspension from two corners into one from an edge): raise "
+     "solver.substeps, or turn cloth.tethers on for a hanging cloth"},
 };
 
 void readSolver(const YAML::Node& node, SolverConfig& s) {
@@ -250,7 +255,7 @@ void readSolver(const YAML::Node& node, SolverConfig& s) {
                                        "levels",           "max_speed",
                                        "threads",          "sleep_speed",
                                        "sleep_time",       "search_window",
-                                       "adaptive_threads", "taut_chains"});
+                                       "adaptive_threads"});
   if (map.has("method")) {
     s.method = toWord(map.get("method"), map.keyOf("method"),
                       {Method::kXpbd, Method::kPbd, Method::kVerlet, Method::kMassSpring});
@@ -275,7 +280,6 @@ void readSolver(const YAML::Node& node, SolverConfig& s) {
   map.read("max_speed", s.max_speed);
   map.read("threads", s.threads);
   map.read("adaptive_threads", s.adaptive_threads);
-  map.read("taut_chains", s.taut_chains);
   map.read("sleep_speed", s.sleep_speed);
   map.read("sleep_time", s.sleep_time);
   map.read("search_window", s.search_window);

@@ -35,7 +35,6 @@ const char kUsage[] =
     "local_searches (per step: searches for a few particles that left their bounds, alone)\n"
     "solo_steps (steps that solver.adaptive_threads ran on the calling thread alone)\n"
     "columns_steps (steps of links alone, run with the particles in columns: Solver::linksAlone)\n"
-    "held_particles (particles solver.taut_chains held straight, mean over the steps)\n"
     "method substeps\n"
     "iterations ...).\n"
     "Only the step calls are timed (cpu_ms_per_step: their processor time, which leaves out\n"
@@ -205,8 +204,6 @@ struct BenchResult {
   long long solo_steps = 0;
   // Steps of links alone, run with the particles in columns (StepStats::links_in_columns).
   long long columns_steps = 0;
-  // Particles held straight in taut chains (solver.taut_chains), mean over the steps.
-  double held_particles = 0.0;
   int particles = 0;
   int sample_every = 1;
   double depth_ms = -1.0;  // --depth: mean time to render one image; < 0: not asked
@@ -308,7 +305,6 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
   long long truncated_searches = 0;
   long long solo_steps = 0;
   long long columns_steps = 0;
-  long long held_particles = 0;
   long long iterations = 0;
   long long done = 0;
   double asleep_seconds = 0.0, awake_seconds = 0.0;
@@ -331,7 +327,6 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
       if (sim.solver().stats().on_one_thread) ++solo_steps;
       if (sim.solver().stats().links_in_columns) ++columns_steps;
     }
-    held_particles += static_cast<long long>(sim.tautChains().held().size());
     ++done;
     // The solver's figures (sim.stats() would also measure the state, as a report does).
     const pbd_cloth::StepStats& stats = sim.solver().stats();
@@ -394,7 +389,6 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
   result.truncated_searches = truncated_searches;
   result.solo_steps = solo_steps;
   result.columns_steps = columns_steps;
-  result.held_particles = static_cast<double>(held_particles) * per_step;
   return result;
 }
 
@@ -410,7 +404,7 @@ void printResult(const pbd_cloth::SceneConfig& scene, const BenchResult& r) {
       "asleep_steps=%lld asleep_ms_per_step=%.6g awake_ms_per_step=%.6g "
       "vertex_triangle_pairs=%.6g edge_edge_pairs=%.6g search_window=%.6g "
       "truncated_searches=%lld local_searches=%.6g last_second_median_structural_max_strain=%.9g "
-      "solo_steps=%lld threads=%d columns_steps=%lld held_particles=%.6g",
+      "solo_steps=%lld threads=%d columns_steps=%lld",
       r.wall_ms_per_step, r.max_strain, last.mean_strain, r.max_penetration,
       last.self_intersections, last.energy, last.finite ? 1 : 0, r.steps, r.sim_time,
       r.iterations_per_step, r.predict_ms, r.collide_ms, r.project_ms, r.update_ms,
@@ -421,7 +415,7 @@ void printResult(const pbd_cloth::SceneConfig& scene, const BenchResult& r) {
       r.asleep_ms_per_step, r.awake_ms_per_step, r.vertex_triangle_pairs, r.edge_edge_pairs,
       r.search_window, r.truncated_searches, r.local_searches,
       r.last_second_median_structural_max_strain, r.solo_steps, scene.solver.threads,
-      r.columns_steps, r.held_particles);
+      r.columns_steps);
   if (r.depth_ms >= 0.0) std::printf(" depth_ms=%.6g", r.depth_ms);
   std::printf("\n");
 }

@@ -102,10 +102,6 @@ SceneConfig swingingCloth(int levels) {
   scene.solver.substeps = 10;
   scene.solver.damping = 0.1;
   scene.solver.levels = levels;
-  // The taut first row swept, not held straight (solver.taut_chains): at 10 substeps the levels'
-  // gain is mostly there (with the row held, plain passes end this run at 0.040 and the levels at
-  // 0.050, measured 2026-12-06; the swinging cloth's bench charts both).
-  scene.solver.taut_chains = false;
   return scene;
 }
 

@@ -188,7 +188,7 @@ TEST(CollisionGranular, OverlappingParticlesSeparateWithoutPopping) {
 // land at 2.4 m/s, yet none falls through (the gaps between cloth particles, 3 cm - 2 x 0.5 cm,
 // are narrower than a grain, 4 cm), and the cloth sags under their weight. The cloth stretches a
 // little (as a hammock's fabric does): pinned at its four flat corners, inextensible links would
-// have one shape only, the flat one, which solver.taut_chains holds.
+// have one shape only, the flat one.
 TEST(CollisionGranular, GrainsLandInClothHammock) {
   SceneConfig scene = test::clothScene(12, 12, 0.03, Method::kXpbd);
   scene.solver.substeps = 20;

@@ -63,7 +63,6 @@ TEST(LinksAlone, ColumnsGiveTheBitsOfThePassesInPlace) {
     EXPECT_EQ(columns.particles().substep_start, in_place.particles().substep_start) << describe(v);
     // The pins' reactions are read from the columns too.
     EXPECT_EQ(columns.solver().supportForce(), in_place.solver().supportForce()) << describe(v);
-    // (Shared by the pins and the first row between them, held straight: solver.taut_chains.)
     double support = 0.0;
     for (const Vec3& f : columns.solver().supportForce()) support += f.norm();
     EXPECT_GT(support, 0.1) << describe(v);

@@ -510,6 +510,18 @@ TEST(SceneYaml, RemovedKeysNameWhatReplacedThem) {
       {"solver: {avx512: false}",
        "solver.avx512: moved to cloth_bench --no-avx512 (a switch for comparing code paths, not a "
        "scene key)"},
+      {"solver: {substeps: 20, taut_chains: true}",
+       "solver.taut_chains: was removed (a special case of one geometry: it held a grid row "
+       "straight only while its two held ends were exactly its rest length apart, so one "
+       "micrometre of slack turned it off, and where it acted it turned a suspension from two "
+       "corners into one from an edge): raise solver.substeps, or turn cloth.tethers on for a "
+       "hanging cloth"},
+      {"solver: {taut_chains: false}",
+       "solver.taut_chains: was removed (a special case of one geometry: it held a grid row "
+       "straight only while its two held ends were exactly its rest length apart, so one "
+       "micrometre of slack turned it off, and where it acted it turned a suspension from two "
+       "corners into one from an edge): raise solver.substeps, or turn cloth.tethers on for a "
+       "hanging cloth"},
   };
   for (const auto& c : cases) EXPECT_EQ(errorOf(c.first), c.second) << c.first;
 }

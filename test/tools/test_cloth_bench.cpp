@@ -96,18 +96,14 @@ TEST(ClothBench, CountsTheStepsOfLinksAlone) {
   EXPECT_EQ(bending.at("columns_steps"), "0");
 }
 
-// held_particles: the 8 particles of the small untethered cloth's top row between its two pinned
-// corners, held straight in every step (solver.taut_chains); none with the option off, nor with
-// the tethers on (they hold the row already).
-TEST(ClothBench, CountsTheParticlesOfTautChains) {
-  const auto held = keyValues(runBench("--duration 0.5" + kSmallUntethered).out);
-  ASSERT_EQ(held.count("held_particles"), 1u);
-  EXPECT_EQ(held.at("held_particles"), "8");
-  for (const std::string& other : {" --set solver.taut_chains=false" + kSmallUntethered, kSmall}) {
-    const auto none = keyValues(runBench("--duration 0.5" + other).out);
-    ASSERT_EQ(none.count("held_particles"), 1u) << other;
-    EXPECT_EQ(none.at("held_particles"), "0") << other;
-  }
+// solver.taut_chains left the product on 2026-12-07: its metric left the line, and a scene or
+// an override that still names the key fails with exit status 2 and a message naming it.
+TEST(ClothBench, TautChainsAreGone) {
+  const auto line = keyValues(runBench("--duration 0.1" + kSmallUntethered).out);
+  EXPECT_EQ(line.count("held_particles"), 0u);
+  const BenchRun removed = runBench("--duration 0.1 --set solver.taut_chains=false" + kSmall);
+  EXPECT_EQ(removed.status, 2) << removed.out;
+  EXPECT_NE(removed.out.find("solver.taut_chains: was removed"), std::string::npos) << removed.out;
 }
 
 TEST(ClothBench, WritesPositionsAndMeshOfTheFinalState) {

@@ -40,7 +40,6 @@ struct SimulationHealth {
   double max_strain = 0.0;
   double max_penetration = 0.0;    // m
   int degenerate_constraints = 0;  // skipped in the last step (coincident particles)
-  int held_straight = 0;           // particles of taut chains held in the last step (taut_chains.h)
   bool finite = true;
   // Steps undone by fault recovery since start, and the latest one's fault (Simulation).
   std::uint64_t restored_steps = 0;

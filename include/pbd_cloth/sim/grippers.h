@@ -8,7 +8,6 @@
 #include <vector>
 
 #include "pbd_cloth/config/scene_config.h"
-#include "pbd_cloth/constraints/taut_chains.h"
 #include "pbd_cloth/model/particles.h"
 
 namespace pbd_cloth {
@@ -59,8 +58,7 @@ class Grippers {
   }
 
   // Force (N) the held particles exerted on the gripper over the last step (simulation.h).
-  Eigen::Vector3d force(int gripper, const Vec3Array& support_force,
-                        const TautChains& taut_chains) const;
+  Eigen::Vector3d force(int gripper, const Vec3Array& support_force) const;
 
  private:
   void release(GripperState& gripper, Particles& particles);

@@ -9,7 +9,6 @@
 #include <vector>
 
 #include "pbd_cloth/config/scene_config.h"
-#include "pbd_cloth/constraints/taut_chains.h"
 #include "pbd_cloth/constraints/tethers.h"
 #include "pbd_cloth/model/particles.h"
 #include "pbd_cloth/sim/colliders.h"
@@ -70,8 +69,6 @@ class Simulation {
   const Grippers& grippers() const { return grippers_; }
   int gripperIndex(const std::string& name) const;
   const std::string& gripperName(int gripper) const;
-  // solver.taut_chains: the particles held straight in the last step, and the ends holding them.
-  const TautChains& tautChains() const { return taut_chains_; }
   // The pose the gripper reaches at the end of the next step. A live pose stops its trajectory.
   // A pose with a poseProblem() is refused (false) and the gripper keeps its course.
   bool setGripperPose(int gripper, const Pose& pose) { return grippers_.setPose(gripper, pose); }
@@ -183,7 +180,6 @@ class Simulation {
   void kinematicSetChanged();
   void findStartWarnings();
   void stepAwake(double dt, bool targets_set);
-  void stepHeld(double dt);
   // setState's check: empty when the state fits this scene, else what does not.
   std::string checkState(const SimulationState& state) const;
 
@@ -194,9 +190,6 @@ class Simulation {
   // Rebuilds topology_.tethers on a grasp or release (cloth.tethers), inside the step when the
   // grasp is scripted: its scratch is sized in build().
   TetherBuilder tether_builder_;
-  // solver.taut_chains: rows and columns held straight while exactly taut, step by step.
-  TautChains taut_chains_;
-  bool chainsInextensible() const;
   // Per cloth particle, the body holding it while it is kinematic: -1 pinned, g gripper g (so
   // that two grippers' neighbouring patches are two groups of anchors for the tethers).
   std::vector<int> anchor_holder_;

@@ -66,13 +66,6 @@ struct SolverConfig {
   // measured to be faster (another process holds a core), trying all threads again now and then
   // (thread_choice.h). The same results either way: the partition of the work does not change.
   bool adaptive_threads = true;
-  // solver.taut_chains: a grid row or column of inextensible links whose two kinematic ends are as
-  // far apart as its rest lengths add up to (the top row of a cloth pinned at both top corners)
-  // is held straight, its one possible shape, instead of being swept towards it (taut_chains.h).
-  // Only while the links are inextensible: cloth.stretch_compliance 0, and not pbd with
-  // solver.stretch_stiffness < 1 nor mass_spring; and not with cloth.tethers, which hold such a
-  // chain already (each of its particles is tethered to both ends).
-  bool taut_chains = true;
   // solver.search_window: substeps one contact search (particle-particle and self-collision
   // candidates) covers. 0 (the default): chosen per step from the last one's candidates
   // (Collisions, "search window"); k >= 1: every k substeps, a search more wherever a particle

@@ -1,7 +1,5 @@
 #include "pbd_cloth/sim/grippers.h"
 
-#include <algorithm>
-
 #include "pbd_cloth/sim/live_pose.h"
 #include "pbd_cloth/sim/simulation.h"
 
@@ -82,19 +80,9 @@ void Grippers::moveHeld(Particles& particles, double dt) {
   }
 }
 
-Eigen::Vector3d Grippers::force(int gripper, const Vec3Array& support_force,
-                                const TautChains& taut_chains) const {
+Eigen::Vector3d Grippers::force(int gripper, const Vec3Array& support_force) const {
   Eigen::Vector3d force = Eigen::Vector3d::Zero();
-  const std::vector<int>& grasped = states_[gripper].grasped;
-  for (int i : grasped) force += support_force[i];
-  // A chain held straight between its ends (solver.taut_chains) rests on them: each end carries
-  // the share of a held particle's support force that a beam's supports carry of a point load
-  // (1 - s at end a, s at end b, s its place along the chain).
-  auto holds = [&](int i) { return std::find(grasped.begin(), grasped.end(), i) != grasped.end(); };
-  for (const TautChains::Held& h : taut_chains.held()) {
-    if (holds(h.end_a)) force += (1.0 - h.along) * support_force[h.particle];
-    if (holds(h.end_b)) force += h.along * support_force[h.particle];
-  }
+  for (int i : states_[gripper].grasped) force += support_force[i];
   return force;
 }
 

@@ -52,7 +52,6 @@ void Simulation::build() {
   solver_.configure(scene_.solver, clothMaterial(scene_.cloth));
   solver_.prepare(particles_, topology_);
   collisions_.prepare(particles_, topology_);
-  taut_chains_.build(particles_, topology_);
   solver_.mutableStats() = StepStats();
   solver_.initializeVelocities(particles_, 1.0 / scene_.step_rate);
   anchor_holder_.assign(particles_.cloth_count, -1);
@@ -149,7 +148,7 @@ void Simulation::kinematicSetChanged() {
 }
 
 Eigen::Vector3d Simulation::gripperForce(int gripper) const {
-  return grippers_.force(gripper, solver_.supportForce(), taut_chains_);
+  return grippers_.force(gripper, solver_.supportForce());
 }
 
 int Simulation::obstacleIndex(const std::string& name) const {
@@ -229,34 +228,9 @@ void Simulation::updateKinematicTargets(double dt) {
     particles_.kinematic_to[i] = particles_.position[i];
   }
   grippers_.moveHeld(particles_, dt);
-  // Taut chains between the kinematic particles join them for this step (released in step()).
-  // Off, none is held, and the last held list goes too: release() must not free a particle a
-  // gripper has grasped since. With tethers (cloth.tethers) a taut chain's particles are already
-  // held: each is tethered to both ends, and the two tethers' spheres meet only at its place on
-  // the segment. Holding them as kinematic particles as well changed nothing there but the
-  // order of the sweep's corrections, and that for the worse: config/hanging.yaml at rest ended
-  // at 0.12 % strain (compression next to its side edges) against 0.0042 % (doc/journal.md,
-  // "2026-12-06: Taut chains held straight").
-  if (scene_.solver.taut_chains && !scene_.cloth.tethers && chainsInextensible()) {
-    taut_chains_.hold(particles_);
-  } else {
-    taut_chains_.forget();
-  }
-}
-
-// Links that cannot stretch: only then is a taut chain's straight shape the only one it may take.
-bool Simulation::chainsInextensible() const {
-  const SolverConfig& s = scene_.solver;
-  if (scene_.cloth.stretch_compliance != 0.0 || s.method == Method::kMassSpring) return false;
-  return s.method != Method::kPbd || s.stretch_stiffness == 1.0;
 }
 
 void Simulation::step(double dt) {
-  stepHeld(dt);
-  taut_chains_.release(particles_);  // the chains held for the step are free again
-}
-
-void Simulation::stepHeld(double dt) {
   if (sleeping_.asleep()) {
     moveKinematicBodies(dt);
     // An injected fault is for a step that solves.
