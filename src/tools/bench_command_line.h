@@ -203,6 +203,43 @@ class LastSecondStrain {
   bool diverged_ = false;
 };
 
+// The structural strain of every step of the run's last second of simulated time (the last
+// round(step_rate) steps, or every step of a shorter run), max and mean, and their medians
+// (median_structural_max_strain_last_1s, median_structural_mean_strain_last_1s). Unlike
+// LastSecondStrain it reads every step, whatever --sample-every says: the structural strain costs
+// a pass over the links, not the self-intersection count of a metric sample. A cloth that blows up
+// inside that second has no median (NaN), as one without steps there.
+class LastSecondStepStrain {
+ public:
+  LastSecondStepStrain(long long steps, double step_rate)
+      : from_step_(std::max(1LL, steps - std::llround(step_rate))) {
+    const std::size_t room = static_cast<std::size_t>(std::max(0LL, steps - from_step_ + 1));
+    max_.reserve(room);
+    mean_.reserve(room);
+  }
+  // Whether the state after `step` steps is one of the last second's.
+  bool counts(long long step) const { return step >= from_step_; }
+  void add(double max_strain, double mean_strain) {
+    if (!std::isfinite(max_strain) || !std::isfinite(mean_strain)) diverged_ = true;
+    max_.push_back(max_strain);
+    mean_.push_back(mean_strain);
+  }
+  double medianMax() const { return median(max_); }
+  double medianMean() const { return median(mean_); }
+
+ private:
+  double median(const std::vector<double>& values) const {
+    if (values.empty() || diverged_) return std::numeric_limits<double>::quiet_NaN();
+    std::vector<double> sorted = values;
+    std::sort(sorted.begin(), sorted.end());
+    const std::size_t n = sorted.size();
+    return n % 2 == 1 ? sorted[n / 2] : 0.5 * (sorted[n / 2 - 1] + sorted[n / 2]);
+  }
+  long long from_step_;
+  std::vector<double> max_, mean_;
+  bool diverged_ = false;
+};
+
 // main() of both tools: the exit status of run(), or what it threw as a message that names the
 // tool: 2 for a bad command line or scene key, 1 for anything else.
 template <typename Run>

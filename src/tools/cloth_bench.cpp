@@ -47,7 +47,11 @@ const char kUsage[] =
     "columns, no shear diagonals; every edge of a mesh cloth), and\n"
     "last_second_median_structural_max_strain the median of that max over the metric samples of\n"
     "the run's last second (a steady reading where the final instant swings; NaN without samples\n"
-    "or when the cloth blows up inside that second). The run stops early at the first sample\n"
+    "or when the cloth blows up inside that second); median_structural_max_strain_last_1s and\n"
+    "median_structural_mean_strain_last_1s the medians of the structural max and mean strain\n"
+    "over every step of the last second of simulated time (whatever --sample-every says; NaN\n"
+    "when the cloth blows up there). Every strain leaves out links between two kinematic\n"
+    "(pinned or grasped) particles. The run stops early at the first sample\n"
     "with a non-finite position or velocity (finite=0, steps = the steps actually run).\n"
     "Exit status 0 "
     "after a run (also with finite=0), 2 for a bad argument, scene key or --load-state file, 1\n"
@@ -208,6 +212,9 @@ struct BenchResult {
   int sample_every = 1;
   double depth_ms = -1.0;  // --depth: mean time to render one image; < 0: not asked
   double last_second_median_structural_max_strain = 0.0;  // bench::LastSecondStrain
+  // bench::LastSecondStepStrain: every step of the last second of simulated time.
+  double median_structural_max_strain_last_1s = 0.0;
+  double median_structural_mean_strain_last_1s = 0.0;
 };
 
 // Writes depth as a Portable Float Map: "Pf", size, a negative scale for little-endian floats,
@@ -290,6 +297,7 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
   }
 
   pbd_cloth::bench::LastSecondStrain last_second(steps, scene.step_rate, result.sample_every);
+  pbd_cloth::bench::LastSecondStepStrain last_second_steps(steps, scene.step_rate);
   pbd_cloth::Metrics last = sim.computeMetrics();
   result.max_strain = last.max_strain;
   result.max_penetration = last.max_penetration;
@@ -342,6 +350,12 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
     search_window += sim.collisions().stats().search_window;
     truncated_searches += sim.collisions().stats().truncated_searches;
     iterations += stats.iterations;
+    if (last_second_steps.counts(done)) {
+      double structural_max = 0.0, structural_mean = 0.0;
+      pbd_cloth::computeStructuralStrain(sim.particles(), sim.topology(), structural_max,
+                                         structural_mean);
+      last_second_steps.add(structural_max, structural_mean);
+    }
     if (done % result.sample_every != 0 && done != steps) continue;
     last = sim.computeMetrics();
     result.max_strain = std::max(result.max_strain, last.max_strain);
@@ -369,6 +383,8 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
   result.sim_time = sim.time();
   result.final_metrics = last;
   result.last_second_median_structural_max_strain = last_second.median();
+  result.median_structural_max_strain_last_1s = last_second_steps.medianMax();
+  result.median_structural_mean_strain_last_1s = last_second_steps.medianMean();
   result.wall_ms_per_step = 1e3 * step_seconds * per_step;
   result.cpu_ms_per_step = 1e3 * static_cast<double>(step_cpu) / CLOCKS_PER_SEC * per_step;
   result.asleep_steps = asleep_steps;
@@ -404,7 +420,8 @@ void printResult(const pbd_cloth::SceneConfig& scene, const BenchResult& r) {
       "asleep_steps=%lld asleep_ms_per_step=%.6g awake_ms_per_step=%.6g "
       "vertex_triangle_pairs=%.6g edge_edge_pairs=%.6g search_window=%.6g "
       "truncated_searches=%lld local_searches=%.6g last_second_median_structural_max_strain=%.9g "
-      "solo_steps=%lld threads=%d columns_steps=%lld",
+      "solo_steps=%lld threads=%d columns_steps=%lld median_structural_max_strain_last_1s=%.9g "
+      "median_structural_mean_strain_last_1s=%.9g",
       r.wall_ms_per_step, r.max_strain, last.mean_strain, r.max_penetration,
       last.self_intersections, last.energy, last.finite ? 1 : 0, r.steps, r.sim_time,
       r.iterations_per_step, r.predict_ms, r.collide_ms, r.project_ms, r.update_ms,
@@ -415,7 +432,8 @@ void printResult(const pbd_cloth::SceneConfig& scene, const BenchResult& r) {
       r.asleep_ms_per_step, r.awake_ms_per_step, r.vertex_triangle_pairs, r.edge_edge_pairs,
       r.search_window, r.truncated_searches, r.local_searches,
       r.last_second_median_structural_max_strain, r.solo_steps, scene.solver.threads,
-      r.columns_steps);
+      r.columns_steps, r.median_structural_max_strain_last_1s,
+      r.median_structural_mean_strain_last_1s);
   if (r.depth_ms >= 0.0) std::printf(" depth_ms=%.6g", r.depth_ms);
   std::printf("\n");
 }

@@ -653,10 +653,14 @@ TEST(LoadScene, FileErrorsNameTheFile) {
   std::remove(path.c_str());
 }
 
+// config/*.yaml and the benchmark variants in config/bench/*.yaml.
 std::vector<std::string> shippedConfigs() {
   std::vector<std::string> paths;
-  for (const auto& entry : std::filesystem::directory_iterator(PBD_CLOTH_SOURCE_DIR "/config")) {
-    if (entry.path().extension() == ".yaml") paths.push_back(entry.path().string());
+  for (const char* folder :
+       {PBD_CLOTH_SOURCE_DIR "/config", PBD_CLOTH_SOURCE_DIR "/config/bench"}) {
+    for (const auto& entry : std::filesystem::directory_iterator(folder)) {
+      if (entry.path().extension() == ".yaml") paths.push_back(entry.path().string());
+    }
   }
   std::sort(paths.begin(), paths.end());
   return paths;

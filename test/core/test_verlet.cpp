@@ -216,6 +216,30 @@ TEST(ClothGrid, StructuralStrainCountsRowsAndColumnsOnly) {
   EXPECT_NEAR(max_structural, 0.1, 1e-9);
 }
 
+// Links between two kinematic particles (pinned or grasped: placed by their pins or grippers, not
+// by the solver) are left out of the strain: two grippers that hold neighbouring particles apart
+// are not the solver's error.
+TEST(ClothGrid, StrainLeavesOutLinksBetweenTwoKinematicParticles) {
+  SceneConfig scene = test::clothScene(3, 3, 0.1, Method::kXpbd);
+  scene.cloth.pinned = {};
+  Simulation sim(scene);
+  Particles particles = sim.particles();
+  const ClothTopology& topology = sim.topology();
+  particles.position[0].x() -= 0.01;  // link (0,0)-(0,1) is 0.11 m long, (0,0)-(1,0) 0.1005 m
+  particles.inverse_mass[0] = 0.0;    // (0, 0) kinematic, (0, 1) free: the link counts
+  double max_structural = 0.0, mean_structural = 0.0, max_all = 0.0, mean_all = 0.0;
+  computeStructuralStrain(particles, topology, max_structural, mean_structural);
+  EXPECT_NEAR(max_structural, 0.1, 1e-9);
+  particles.inverse_mass[1] = 0.0;  // both kinematic: that link is left out
+  computeStructuralStrain(particles, topology, max_structural, mean_structural);
+  computeStrain(particles, topology, max_all, mean_all);
+  const double column = std::sqrt(1.01) - 1.0;  // (0,0)-(1,0), the largest strain left
+  EXPECT_NEAR(max_structural, column, 1e-9);
+  EXPECT_NEAR(mean_structural, column / 11.0, 1e-9);  // 11 of the 12 structural links count
+  // Over every link: the diagonal (0,0)-(1,1), 0.1 m across and 0.11 m along, not the 10 %.
+  EXPECT_NEAR(max_all, std::hypot(0.11, 0.1) / std::hypot(0.1, 0.1) - 1.0, 1e-9);
+}
+
 TEST(ClothGrid, RopeHasNoTriangles) {
   Simulation sim(test::clothScene(1, 20, 0.05, Method::kXpbd));
   EXPECT_EQ(sim.topology().triangleCount(), 0);

@@ -189,6 +189,38 @@ TEST(ClothBench, LastSecondMedianIsTheMedianOfTheLastSecondsSamples) {
               1e-5 * samples.back() + 1e-12);
 }
 
+// median_structural_max_strain_last_1s and ..._mean_...: the medians over every step of the last
+// second of simulated time, whatever --sample-every says (the CSV's rows at --sample-every 1 are
+// those steps), and the mean below the max.
+TEST(ClothBench, MedianOfTheLastSecondReadsEveryStep) {
+  const std::string csv = ::testing::TempDir() + "bench_last_1s.csv";
+  const std::string swinging = std::string(" --config ") + PBD_CLOTH_SOURCE_DIR +
+                               "/config/swinging.yaml --quiet --set cloth.rows=20"
+                               " --set cloth.cols=20 --set 'cloth.pinned=[0,19]'"
+                               " --set cloth.spacing=0.05 --set solver.substeps=4 --duration 2";
+  const BenchRun every =
+      runShell(std::string(CLOTH_BENCH) + swinging + " --sample-every 1 --csv " + csv);
+  ASSERT_EQ(every.status, 0) << every.out;
+  const auto values = keyValues(every.out);
+  ASSERT_EQ(values.count("median_structural_max_strain_last_1s"), 1u) << every.out;
+  ASSERT_EQ(values.count("median_structural_mean_strain_last_1s"), 1u) << every.out;
+  const double median_max = std::stod(values.at("median_structural_max_strain_last_1s"));
+  const double median_mean = std::stod(values.at("median_structural_mean_strain_last_1s"));
+  std::vector<double> samples = structuralMaxStrains(csv);
+  ASSERT_EQ(samples.size(), 121u);  // t = 0 and 120 steps: the last second is steps 60 to 120
+  EXPECT_NEAR(median_max, medianOf(std::vector<double>(samples.begin() + 60, samples.end())),
+              1e-5 * median_max);
+  EXPECT_GT(median_mean, 0.0);
+  EXPECT_LT(median_mean, median_max);
+  // Sampled every 7th step, the medians over the steps are the same, to the printed digit.
+  const auto sparse =
+      keyValues(runShell(std::string(CLOTH_BENCH) + swinging + " --sample-every 7").out);
+  EXPECT_EQ(sparse.at("median_structural_max_strain_last_1s"),
+            values.at("median_structural_max_strain_last_1s"));
+  EXPECT_EQ(sparse.at("median_structural_mean_strain_last_1s"),
+            values.at("median_structural_mean_strain_last_1s"));
+}
+
 // A cloth that blows up inside the window has no steady strain: NaN, though its last sample's
 // strain reads 0 (NaN positions compare false). An explicit mass-spring cloth, one substep of a
 // 60 Hz step at a stiffness far past its limit, is not finite after about 36 steps.
@@ -413,6 +445,34 @@ TEST(ClothBench, UnreachableTargetExitsWithThree) {
 
 // The style rule of the package: every C++ file as the checked-in .clang-format formats it.
 // clang-format is one of the packages scripts/setup_deps installs.
+// Every shipped scene, config/*.yaml and the benchmark variants in config/bench/*.yaml, loads and
+// runs in cloth_bench (three steps) and prints the strain of its final state and the medians over
+// the last second.
+TEST(ShippedScenes, EveryConfigRunsInClothBench) {
+  const BenchRun listing = runShell(std::string("ls ") + PBD_CLOTH_SOURCE_DIR + "/config/*.yaml " +
+                                    PBD_CLOTH_SOURCE_DIR + "/config/bench/*.yaml");
+  ASSERT_EQ(listing.status, 0) << listing.out;
+  std::istringstream lines(listing.out);
+  std::vector<std::string> paths;
+  for (std::string path; std::getline(lines, path);) paths.push_back(path);
+  EXPECT_GE(paths.size(), 20u) << listing.out;
+  EXPECT_NE(listing.out.find("/config/held_corners.yaml"), std::string::npos);
+  EXPECT_NE(listing.out.find("/config/bench/held_100_2pct.yaml"), std::string::npos);
+  for (const std::string& path : paths) {
+    const BenchRun run =
+        runShell(std::string(CLOTH_BENCH) + " --config " + path + " --duration 0.05 --quiet");
+    ASSERT_EQ(run.status, 0) << path << "\n" << run.out;
+    const auto values = keyValues(run.out);
+    EXPECT_EQ(values.at("finite"), "1") << path;
+    for (const char* key :
+         {"final_structural_max_strain", "final_structural_mean_strain",
+          "median_structural_max_strain_last_1s", "median_structural_mean_strain_last_1s"}) {
+      ASSERT_EQ(values.count(key), 1u) << path << ": " << key;
+      EXPECT_TRUE(std::isfinite(std::stod(values.at(key)))) << path << ": " << key;
+    }
+  }
+}
+
 TEST(SourceStyle, EveryCppFileIsClangFormatted) {
   const BenchRun run = runShell(std::string("cd '") + PBD_CLOTH_SOURCE_DIR +
                                 "' && find -L src include test \\( -name '*.cpp' -o -name '*.h' \\)"

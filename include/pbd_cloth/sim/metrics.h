@@ -24,7 +24,10 @@ struct Metrics {
   bool finite = true;   // every position and velocity finite
 };
 
-// Strain over the stretch constraints: |l - l0| / l0.
+// Strain over the stretch constraints: |l - l0| / l0. Links between two kinematic particles
+// (pinned or grasped: both ends placed by a pin or a gripper, not by the solver) are left out:
+// their length is what the pins and grippers make it, and two grasped neighbours would count as
+// links the solver met exactly (or a gripper that brings two pins closer as its error).
 void computeStrain(const Particles& particles, const ClothTopology& topology, double& max_strain,
                    double& mean_strain);
 

@@ -14,19 +14,23 @@ namespace pbd_cloth {
 
 namespace {
 
-// Max and mean |l - l0| / l0 over the stretch constraints [0, count).
+// Max and mean |l - l0| / l0 over the stretch constraints [0, count) that have a particle the
+// solver moves (links between two kinematic particles left out).
 void strainOfFirst(const Particles& particles, const ClothTopology& topology, std::size_t count,
                    double& max_strain, double& mean_strain) {
   max_strain = 0.0;
   double sum = 0.0;
+  std::size_t counted = 0;
   for (std::size_t c = 0; c < count; ++c) {
     const DistanceConstraint& con = topology.stretch[c];
+    if (particles.isKinematic(con.i) && particles.isKinematic(con.j)) continue;
     const double length = (particles.position[con.i] - particles.position[con.j]).norm();
     const double strain = std::abs(length - con.rest_length) / con.rest_length;
     max_strain = std::max(max_strain, strain);
     sum += strain;
+    ++counted;
   }
-  mean_strain = count == 0 ? 0.0 : sum / static_cast<double>(count);
+  mean_strain = counted == 0 ? 0.0 : sum / static_cast<double>(counted);
 }
 
 }  // namespace
