@@ -255,7 +255,9 @@ void readSolver(const YAML::Node& node, SolverConfig& s) {
                                        "levels",           "max_speed",
                                        "threads",          "sleep_speed",
                                        "sleep_time",       "search_window",
-                                       "adaptive_threads"});
+                                       "adaptive_threads", "target_max_strain",
+                                       "target_penetration", "min_substeps",
+                                       "max_substeps"});
   if (map.has("method")) {
     s.method = toWord(map.get("method"), map.keyOf("method"),
                       {Method::kXpbd, Method::kPbd, Method::kVerlet, Method::kMassSpring});
@@ -283,6 +285,10 @@ void readSolver(const YAML::Node& node, SolverConfig& s) {
   map.read("sleep_speed", s.sleep_speed);
   map.read("sleep_time", s.sleep_time);
   map.read("search_window", s.search_window);
+  map.read("target_max_strain", s.target_max_strain);
+  map.read("target_penetration", s.target_penetration);
+  map.read("min_substeps", s.min_substeps);
+  map.read("max_substeps", s.max_substeps);
 }
 
 void readCloth(const YAML::Node& node, ClothConfig& c) {

@@ -35,6 +35,9 @@ const char kUsage[] =
     "local_searches (per step: searches for a few particles that left their bounds, alone)\n"
     "solo_steps (steps that solver.adaptive_threads ran on the calling thread alone)\n"
     "columns_steps (steps of links alone, run with the particles in columns: Solver::linksAlone)\n"
+    "target_met_fraction (solver.target_max_strain / target_penetration: the fraction of the\n"
+    "steps that met the targets; 1 without a target) mean_substeps (substeps run per step, every\n"
+    "attempt of a step run again counted) redone_steps (steps a target ran again)\n"
     "method substeps\n"
     "iterations ...).\n"
     "Only the step calls are timed (cpu_ms_per_step: their processor time, which leaves out\n"
@@ -208,6 +211,11 @@ struct BenchResult {
   long long solo_steps = 0;
   // Steps of links alone, run with the particles in columns (StepStats::links_in_columns).
   long long columns_steps = 0;
+  // Accuracy on demand (Simulation::accuracy()): the fraction of the steps that met the targets,
+  // the substeps run per step (every attempt), the steps run again.
+  double target_met_fraction = 1.0;
+  double mean_substeps = 0.0;
+  long long redone_steps = 0;
   int particles = 0;
   int sample_every = 1;
   double depth_ms = -1.0;  // --depth: mean time to render one image; < 0: not asked
@@ -313,6 +321,7 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
   long long truncated_searches = 0;
   long long solo_steps = 0;
   long long columns_steps = 0;
+  long long met_steps = 0, substeps_run = 0, redone_steps = 0;
   long long iterations = 0;
   long long done = 0;
   double asleep_seconds = 0.0, awake_seconds = 0.0;
@@ -335,6 +344,10 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
       if (sim.solver().stats().on_one_thread) ++solo_steps;
       if (sim.solver().stats().links_in_columns) ++columns_steps;
     }
+    const pbd_cloth::Simulation::AccuracyReport& accuracy = sim.accuracy();
+    if (accuracy.target_met) ++met_steps;
+    substeps_run += accuracy.substeps_run;
+    if (accuracy.redos > 0) ++redone_steps;
     ++done;
     // The solver's figures (sim.stats() would also measure the state, as a report does).
     const pbd_cloth::StepStats& stats = sim.solver().stats();
@@ -405,6 +418,9 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
   result.truncated_searches = truncated_searches;
   result.solo_steps = solo_steps;
   result.columns_steps = columns_steps;
+  result.target_met_fraction = static_cast<double>(met_steps) * per_step;
+  result.mean_substeps = static_cast<double>(substeps_run) * per_step;
+  result.redone_steps = redone_steps;
   return result;
 }
 
@@ -421,7 +437,8 @@ void printResult(const pbd_cloth::SceneConfig& scene, const BenchResult& r) {
       "vertex_triangle_pairs=%.6g edge_edge_pairs=%.6g search_window=%.6g "
       "truncated_searches=%lld local_searches=%.6g last_second_median_structural_max_strain=%.9g "
       "solo_steps=%lld threads=%d columns_steps=%lld median_structural_max_strain_last_1s=%.9g "
-      "median_structural_mean_strain_last_1s=%.9g",
+      "median_structural_mean_strain_last_1s=%.9g target_met_fraction=%.6g mean_substeps=%.6g "
+      "redone_steps=%lld",
       r.wall_ms_per_step, r.max_strain, last.mean_strain, r.max_penetration,
       last.self_intersections, last.energy, last.finite ? 1 : 0, r.steps, r.sim_time,
       r.iterations_per_step, r.predict_ms, r.collide_ms, r.project_ms, r.update_ms,
@@ -433,7 +450,8 @@ void printResult(const pbd_cloth::SceneConfig& scene, const BenchResult& r) {
       r.search_window, r.truncated_searches, r.local_searches,
       r.last_second_median_structural_max_strain, r.solo_steps, scene.solver.threads,
       r.columns_steps, r.median_structural_max_strain_last_1s,
-      r.median_structural_mean_strain_last_1s);
+      r.median_structural_mean_strain_last_1s, r.target_met_fraction, r.mean_substeps,
+      r.redone_steps);
   if (r.depth_ms >= 0.0) std::printf(" depth_ms=%.6g", r.depth_ms);
   std::printf("\n");
 }

@@ -136,6 +136,12 @@ class Collisions {
   }
   // Ends the step: obstacles arrive at their targets.
   void endStep();
+  // A step run again from its start (sim/accuracy_controller.h): what beginStep .. endStep
+  // change across steps (the obstacles' poses, the step's stamp, the adaptive search window) is
+  // saved before its first attempt and restored before the next. Allocates nothing after the
+  // first.
+  void rememberStepStart();
+  void restoreStepStart();
   // Between steps: contact lists that an extreme step grew beyond their reserve go back to it
   // (SelfCollision::releaseExcessCapacity). Returns the bytes released.
   std::size_t releaseExcessCapacity();
@@ -300,6 +306,9 @@ class Collisions {
   double window_end_ = 1.0;
   // The adaptive rule: its window for the next step, and this step's searches.
   int adaptive_window_ = 0;
+  std::vector<Pose> start_pose_;  // rememberStepStart
+  int start_step_ = 0;
+  int start_window_ = 0;
   int searches_in_step_ = 0;
   double substep_end_ = 0.0;
   ParticleContacts particle_contacts_;

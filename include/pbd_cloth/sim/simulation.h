@@ -11,6 +11,7 @@
 #include "pbd_cloth/config/scene_config.h"
 #include "pbd_cloth/constraints/tethers.h"
 #include "pbd_cloth/model/particles.h"
+#include "pbd_cloth/sim/accuracy_controller.h"
 #include "pbd_cloth/sim/colliders.h"
 #include "pbd_cloth/sim/fault_guard.h"
 #include "pbd_cloth/sim/grippers.h"
@@ -107,6 +108,23 @@ class Simulation {
     links_.setEnabled(link, enabled, collisions_);
   }
 
+  // Accuracy on demand (solver.target_max_strain, solver.target_penetration): what the last
+  // step reached against the targets. Without a target, only `active` (false) and `substeps`.
+  struct AccuracyReport {
+    bool active = false;
+    double target_max_strain = 0.0;    // solver.target_max_strain (0: none)
+    double target_penetration = 0.0;   // solver.target_penetration (m, 0: none)
+    double structural_max_strain = 0.0;  // reached by the last step (its final attempt)
+    double max_penetration = 0.0;      // m; measured only with a penetration target
+    bool target_met = true;            // the last step met every target
+    bool budget_exhausted = false;     // ... did not, at solver.max_substeps
+    int substeps = 0;                  // of the last step's final attempt
+    int substeps_run = 0;              // over all its attempts (its cost)
+    int redos = 0;                     // times the last step was run again
+  };
+  const AccuracyReport& accuracy() const { return accuracy_report_; }
+  const AccuracyController& accuracyController() const { return accuracy_; }
+
   // Live tuning: applied at the next step. Throws ConfigError on an invalid value.
   void setSolverConfig(const SolverConfig& solver);
   void setClothCompliance(double stretch_compliance, double bend_compliance);
@@ -173,6 +191,8 @@ class Simulation {
   mutable bool state_measured_ = false;
   mutable StepStats reported_stats_;
   void build();
+  // The solve of a step: once, or with a target until it is met or the budget is spent.
+  void solveStep(double dt);
   void moveKinematicBodies(double dt);
   void followTrajectories(double t_end);
   void updateKinematicTargets(double dt);
@@ -200,6 +220,9 @@ class Simulation {
   double time_ = 0.0;
   std::vector<std::string> start_warnings_;
   FaultGuard fault_guard_;
+  AccuracyController accuracy_;
+  AccuracyReport accuracy_report_;
+  Particles redo_start_;  // the particles at the start of a step a target may run again
   Sleeping sleeping_;
 };
 

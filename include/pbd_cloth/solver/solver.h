@@ -58,6 +58,9 @@ class Solver {
  public:
   void configure(const SolverConfig& solver, const ClothMaterial& cloth);
   const SolverConfig& config() const { return config_; }
+  // The substeps of the next step (the accuracy controller's choice, sim/accuracy_controller.h);
+  // the rest of the configuration stays.
+  void setSubsteps(int substeps) { config_.substeps = substeps; }
   // Sizes every buffer for these particles and constraints; call after the topology changes.
   void prepare(const Particles& particles, const ClothTopology& topology);
   // Gives Verlet its exact start (x_prev = x0 - v0 h + g h^2 / 2, REFERENCE_CASES.md case 1).

@@ -43,6 +43,14 @@ struct SolverConfig {
   // after hierarchical PBD), each pass coarsest first. 0 = off (the default). Grid cloth and zero
   // stretch compliance only: the links are inextensible.
   int levels = 0;
+  // Accuracy on demand (sim/accuracy_controller.h): solver.target_max_strain (largest structural
+  // strain, e.g. 0.01 for 1 %) and solver.target_penetration (m); 0 = no target. With either
+  // set, each step's substeps are chosen within solver.min_substeps .. solver.max_substeps
+  // (solver.substeps is where they start) so that the state reported meets the targets.
+  double target_max_strain = 0.0;
+  double target_penetration = 0.0;
+  int min_substeps = 1;
+  int max_substeps = 200;
   // solver.max_speed (m/s): a free particle faster than this after a step means the step blew up
   // (its kinetic energy m v^2 / 2 per particle is out of bounds). Where fault recovery is on (the
   // node), that step is undone: Simulation::step, "Faults". Nothing a robot handles moves a cloth

@@ -58,13 +58,17 @@ struct SimulationState {
   std::vector<BodySnapshot> robot_links;  // one per URDF link
   std::vector<MeshContactCache> mesh_contacts;
   int search_window = 0;  // substeps; 0: none chosen yet (the whole step)
+  // The substeps solver.target_max_strain chose for the next step (accuracy_controller.h); 0:
+  // no target, or none chosen yet.
+  int chosen_substeps = 0;
 };
 
 // The state file: "PBDSTATE", a format version (uint32), then the fields in the order of
 // SimulationState, every number in the machine's own binary (IEEE doubles, little-endian on every
 // platform ROS supports): nothing is rounded, so a state read back is the state written.
-// Version 2 added search_window at the end; a version 1 file still reads (search_window 0).
-constexpr std::uint32_t kStateFileVersion = 2;
+// Version 2 added search_window at the end, version 3 chosen_substeps after it; older files still
+// read (those fields 0).
+constexpr std::uint32_t kStateFileVersion = 3;
 constexpr std::uint32_t kOldestStateFileVersion = 1;
 void writeState(std::ostream& out, const SimulationState& state);
 // False with the reason (wrong magic or version, truncated, implausible sizes) on a bad file;

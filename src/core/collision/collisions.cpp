@@ -816,6 +816,19 @@ void Collisions::endStep() {
   for (std::size_t k = 0; k < obstacles_.size(); ++k) obstacles_[k].pose = obstacle_targets_[k];
 }
 
+void Collisions::rememberStepStart() {
+  start_pose_.resize(obstacles_.size());
+  for (std::size_t k = 0; k < obstacles_.size(); ++k) start_pose_[k] = obstacles_[k].pose;
+  start_step_ = step_;
+  start_window_ = adaptive_window_;
+}
+
+void Collisions::restoreStepStart() {
+  for (std::size_t k = 0; k < obstacles_.size(); ++k) obstacles_[k].pose = start_pose_[k];
+  step_ = start_step_;
+  adaptive_window_ = start_window_;
+}
+
 std::size_t Collisions::releaseExcessCapacity() {
   return particle_contacts_.releaseExcessCapacity() + self_collision_pairs_.releaseExcessCapacity();
 }

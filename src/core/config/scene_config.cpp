@@ -174,6 +174,10 @@ void validateSolver(const SolverConfig& s) {
   checkNumber("solver.spring_damping", s.spring_damping, kNonNegative);
   checkNumber("solver.bend_spring_stiffness", s.bend_spring_stiffness, kNonNegative);
   checkInteger("solver.levels", s.levels, 0, 16);
+  checkNumber("solver.target_max_strain", s.target_max_strain, Range{0.0, 1.0, false, true});
+  checkNumber("solver.target_penetration", s.target_penetration, Range{0.0, 1.0, false, true});
+  checkInteger("solver.min_substeps", s.min_substeps, 1, kMaxPasses);
+  checkInteger("solver.max_substeps", s.max_substeps, s.min_substeps, kMaxPasses);
   checkInteger("solver.threads", s.threads, 1, 64);
   checkInteger("solver.search_window", s.search_window, 0, kMaxPasses);
   checkNumber("solver.sleep_speed", s.sleep_speed, kNonNegative);

@@ -50,8 +50,13 @@ void Simulation::build() {
   collisions_.configure(collisionSettings(scene_));
   links_.build(scene_.robot, collisions_);
   solver_.configure(scene_.solver, clothMaterial(scene_.cloth));
+  accuracy_ = AccuracyController();
+  accuracy_.configure(scene_.solver);
+  accuracy_report_ = AccuracyReport();
+  redo_start_ = particles_;  // sized once: a step copies into it without allocating
   solver_.prepare(particles_, topology_);
   collisions_.prepare(particles_, topology_);
+  collisions_.rememberStepStart();  // sizes its buffer
   solver_.mutableStats() = StepStats();
   solver_.initializeVelocities(particles_, 1.0 / scene_.step_rate);
   anchor_holder_.assign(particles_.cloth_count, -1);
@@ -172,6 +177,7 @@ void Simulation::setSolverConfig(const SolverConfig& solver) {
   validate(candidate);
   scene_.solver = solver;
   solver_.configure(scene_.solver, clothMaterial(scene_.cloth));
+  accuracy_.configure(scene_.solver);
   wake();  // gravity, damping or the solve changed: the rest state may no longer be one
 }
 
@@ -240,6 +246,7 @@ void Simulation::step(double dt) {
       collisions_.endStep();  // colliders at their (unchanged) targets
       time_ += dt;
       sleeping_.countSleptStep();
+      accuracy_report_.substeps_run = accuracy_report_.redos = 0;  // no solve: the state stands
       StepStats& stats = solver_.mutableStats();
       stats.sim_time += dt;
       stats.step_wall_time = stats.predict_time = stats.collide_time = 0.0;
@@ -262,7 +269,7 @@ void Simulation::stepAwake(double dt, bool targets_set) {
   if (!targets_set) moveKinematicBodies(dt);
   const double max_speed = scene_.solver.max_speed;
   fault_guard_.injectBeforeSolve(particles_, max_speed, dt);
-  solver_.step(dt, particles_, topology_, collisions_);
+  solveStep(dt);
   fault_guard_.injectAfterSolve(particles_, max_speed, dt);
   grippers_.endStep();
   links_.endStep();
@@ -271,6 +278,47 @@ void Simulation::stepAwake(double dt, bool targets_set) {
   const bool undone = fault_guard_.checkStep(particles_, max_speed, time_);
   state_measured_ = false;
   if (!undone) sleeping_.update(scene_.solver, particles_, collisions_, dt);
+}
+
+// With a target (accuracy_controller.h), the step runs with the controller's substeps; far over
+// the target it runs again from its start with more (the particles and the collisions' step
+// state restored, the time not advanced twice), at most AccuracyController::kMaxRedos times.
+// Without one, the solver steps exactly as configured.
+void Simulation::solveStep(double dt) {
+  AccuracyReport& report = accuracy_report_;
+  report.active = accuracy_.active();
+  if (!report.active) {
+    solver_.step(dt, particles_, topology_, collisions_);
+    report.substeps = report.substeps_run = solver_.stats().substeps;
+    return;
+  }
+  report.target_max_strain = accuracy_.targetStrain();
+  report.target_penetration = accuracy_.targetPenetration();
+  redo_start_ = particles_;  // same sizes: no allocation
+  collisions_.rememberStepStart();
+  report.substeps_run = 0;
+  for (int attempt = 0;; ++attempt) {
+    solver_.setSubsteps(accuracy_.substeps());
+    solver_.step(dt, particles_, topology_, collisions_);
+    report.substeps = accuracy_.substeps();
+    report.substeps_run += report.substeps;
+    double mean_strain = 0.0;
+    computeStructuralStrain(particles_, topology_, report.structural_max_strain, mean_strain);
+    report.max_penetration =
+        accuracy_.measuresPenetration() ? collisions_.maxPenetration(particles_, topology_) : 0.0;
+    const double ratio = accuracy_.ratio(report.structural_max_strain, report.max_penetration);
+    if (accuracy_.redo(ratio, attempt)) {
+      particles_ = redo_start_;
+      collisions_.restoreStepStart();
+      solver_.mutableStats().sim_time -= dt;
+      continue;
+    }
+    report.redos = attempt;
+    report.target_met = AccuracyController::met(ratio);
+    report.budget_exhausted = !report.target_met && accuracy_.substeps() >= scene_.solver.max_substeps;
+    accuracy_.update(ratio);
+    break;
+  }
 }
 
 // Where every kinematic body is going in the step: grippers (and their grasp events), robot links

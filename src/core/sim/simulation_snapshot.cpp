@@ -92,6 +92,7 @@ void Simulation::getState(SimulationState& state) const {
   }
   collisions_.getMeshContacts(state.mesh_contacts);
   state.search_window = collisions_.adaptiveSearchWindow();
+  state.chosen_substeps = accuracy_.active() ? accuracy_.substeps() : 0;
 }
 
 std::string Simulation::checkState(const SimulationState& state) const {
@@ -159,6 +160,10 @@ std::string Simulation::checkState(const SimulationState& state) const {
     error = "search_window: " + std::to_string(state.search_window) + " is not in [0, " +
             std::to_string(kMaxPasses) + "] substeps";
   }
+  if (error.empty() && (state.chosen_substeps < 0 || state.chosen_substeps > kMaxPasses)) {
+    error = "chosen_substeps: " + std::to_string(state.chosen_substeps) + " is not in [0, " +
+            std::to_string(kMaxPasses) + "]";
+  }
   for (std::size_t c = 0; error.empty() && c < state.mesh_contacts.size(); ++c) {
     const MeshContactCache& cache = state.mesh_contacts[c];
     const std::string field = at("mesh_contacts", c);
@@ -213,6 +218,7 @@ bool Simulation::setState(const SimulationState& state, std::string& reason) {
   }
   collisions_.setMeshContacts(state.mesh_contacts);
   collisions_.setAdaptiveSearchWindow(state.search_window);
+  if (state.chosen_substeps > 0) accuracy_.setSubsteps(state.chosen_substeps);
   kinematicSetChanged();  // tethers of the restored grasps
   collisions_.findCandidatesNow(particles_, topology_);
   state_measured_ = false;

@@ -180,6 +180,7 @@ void writeSolverPart(ByteWriter& w, const SimulationState& state) {
     w.vec(c.point);
   }
   w.index(state.search_window);
+  w.index(state.chosen_substeps);
 }
 
 void readSolverPart(ByteReader& r, SimulationState& state) {
@@ -193,6 +194,7 @@ void readSolverPart(ByteReader& r, SimulationState& state) {
     c.point = r.vec("mesh contact point");
   }
   if (r.version() >= 2) state.search_window = r.index("search_window");
+  if (r.version() >= 3) state.chosen_substeps = r.index("chosen_substeps");
 }
 
 std::vector<std::uint8_t> encodeState(const SimulationState& state) {
@@ -324,6 +326,7 @@ bool decodeSolverData(const std::vector<std::uint8_t>& data, SimulationState& st
   state.substep_start = std::move(read.substep_start);
   state.mesh_contacts = std::move(read.mesh_contacts);
   state.search_window = read.search_window;
+  state.chosen_substeps = read.chosen_substeps;
   return true;
 }
 
