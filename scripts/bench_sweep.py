@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """The sweeps behind doc/*.csv: cloth_bench over method x substeps x iterations x ordering on the
-four bench scenes, bullet_cloth_bench over its substep and iteration knobs on the same scenes, and
-the stability matrix. Called by scripts/run_bench; one CSV row per run with every key=value field
+four bench scenes, bullet_cloth_bench over its substep and iteration knobs on the same scenes, the
+general case (`general`: corners held closer than the width, the T-shirt held at its shoulders;
+GENERAL_SCENES, GENERAL_PBD_SERIES) and the stability matrix. Called by scripts/run_bench; one CSV row per run with every key=value field
 the tool printed, plus the overrides that made the run.
 
     /usr/bin/python3 scripts/bench_sweep.py --bin-dir <devel/lib/pbd_cloth> --out doc [--quick]
@@ -27,6 +28,8 @@ COMMAND_LINE_SWITCHES = {'solver.simd=false': '--no-simd', 'solver.avx512=false'
 
 
 def run_timeout(run):
+    if run.timeout:
+        return run.timeout
     if run.scene in CLOTH_SCENES:
         steps = run.duration * 60.0
         return max(20.0, 4.0 * (1.0 + steps * run.fields.get('passes', 1) * 0.6e-3))
@@ -73,6 +76,7 @@ class Run(object):
         self.fields = dict(fields)
         self.positions = positions
         self.sample_every = CLOTH_SAMPLE_EVERY if scene in CLOTH_SCENES else 0
+        self.timeout = None  # s; None: run_timeout's rule
 
     def command(self, bin_dir, positions_file=None):
         cmd = [os.path.join(bin_dir, self.tool), '--config', os.path.join('config', self.scene),
@@ -291,6 +295,56 @@ def swinging100_runs(quick):
     return runs
 
 
+# The general case (issue 50): scenes where no row is exactly taut. Each is a panel of
+# doc/general_pareto.png: (label, scene file under config/, what it is).
+GENERAL_SCENES = [
+    ('held_corners', 'held_corners.yaml', '50 x 50, one diagonal, corners 0.5 % closer'),
+    ('held_50_2pct', 'bench/held_50_2pct.yaml', '50 x 50, one diagonal, corners 2 % closer'),
+    ('held_50_both_05pct', 'bench/held_50_both_05pct.yaml',
+     '50 x 50, both diagonals, corners 0.5 % closer'),
+    ('held_50_both_2pct', 'bench/held_50_both_2pct.yaml',
+     '50 x 50, both diagonals, corners 2 % closer'),
+    ('held_100_05pct', 'bench/held_100_05pct.yaml', '100 x 100, one diagonal, corners 0.5 % closer'),
+    ('held_100_2pct', 'bench/held_100_2pct.yaml', '100 x 100, one diagonal, corners 2 % closer'),
+    ('tshirt_held', 'tshirt_held.yaml', 'T-shirt held at both shoulders (self-collision on)'),
+]
+# pbd_cloth's series on every general scene: curve name -> the --set overrides that make it (the
+# substep count is added per run). Extend with a method's keys, e.g.
+#   'xpbd + 2 Newton steps': ['solver.newton_steps=2'],
+# and it runs at every count of GENERAL_SUBSTEPS on every scene, charted as a curve of its own.
+GENERAL_PBD_SERIES = {
+    'xpbd': [],
+}
+GENERAL_SUBSTEPS = [40, 80, 120, 180, 240]  # x 1 iteration
+# Bullet on the same scene, the same links (each scene's own link set: one diagonal or both),
+# its held particles moved as pins (bullet_cloth_bench): internal steps x position passes.
+GENERAL_BULLET = [(16, 10), (64, 10)]
+
+
+def general_runs(quick):
+    """The general-case scenes (GENERAL_SCENES), 3 s: pbd_cloth's series (GENERAL_PBD_SERIES) at
+    GENERAL_SUBSTEPS x 1 and Bullet at GENERAL_BULLET, recording the final and last-second-median
+    structural strains (cloth_bench and bullet_cloth_bench print both)."""
+    duration = 0.5 if quick else 3.0
+    substeps = [10, 20] if quick else GENERAL_SUBSTEPS
+    bullet = [(4, 2)] if quick else GENERAL_BULLET
+    runs = []
+    for label, scene, _ in GENERAL_SCENES:
+        for curve, sets in GENERAL_PBD_SERIES.items():
+            for s in substeps:
+                run = pbd_run('general', scene, curve, 'xpbd', s, 1, duration, sets, label=label)
+                runs.append(run)
+        for s, i in bullet:
+            runs.append(bullet_run('general', scene, 'bullet', s, i, duration, label=label))
+    for run in runs:
+        # The medians read every step whatever the sampling; the samples (max over the run, the
+        # self-intersection count) every 3rd step, as on the other cloth scenes.
+        run.sample_every = CLOTH_SAMPLE_EVERY
+        # Bullet 64 x 10 at 100 x 100 and the shirt at 240 substeps take a minute or more.
+        run.timeout = 900.0
+    return runs
+
+
 def fabric_runs(quick):
     """config/fabric_table.yaml, 2 s (issue 12, target 3): fabric_simulator's settings, dt 3 ms
     and 12 substeps, with and without self-collision, one and two threads."""
@@ -420,6 +474,17 @@ def parse_metrics(stdout):
     return {}
 
 
+def tool_environment():
+    """The environment of the runs: the repository on ROS_PACKAGE_PATH, so that the scenes'
+    package://pbd_cloth/... files (the T-shirt's mesh) resolve without a sourced workspace (rospack
+    stops at the repository's own package.xml)."""
+    env = dict(os.environ)
+    paths = [p for p in env.get('ROS_PACKAGE_PATH', '').split(':') if p]
+    if REPO not in paths:
+        env['ROS_PACKAGE_PATH'] = ':'.join([REPO] + paths)
+    return env
+
+
 def execute(run, bin_dir):
     """Runs one command from the repository root; returns the CSV row."""
     positions_file = None
@@ -433,7 +498,8 @@ def execute(run, bin_dir):
     begin = time.time()
     try:
         done = subprocess.run(cmd, cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                              universal_newlines=True, timeout=run_timeout(run))
+                              universal_newlines=True, timeout=run_timeout(run),
+                              env=tool_environment())
         metrics = parse_metrics(done.stdout)
         row['exit_status'] = done.returncode
         if done.returncode != 0 or not metrics:
@@ -568,7 +634,7 @@ def main():
                         'swinging, 1 for the others')
     parser.add_argument('--only', nargs='*', default=None,
                         help='sweeps to run: hanging swinging swinging100 fabric towel drape '
-                        'chain stability '
+                        'chain general stability '
                         '(default: all)')
     args = parser.parse_args()
     bin_dir = os.path.abspath(args.bin_dir)
@@ -581,6 +647,7 @@ def main():
             ('swinging100', swinging100_runs, 1, 1), ('fabric', fabric_runs, 1, 3),
             ('towel', towel_runs, 1, 1),
             ('drape', drape_runs, 1, 1), ('chain', chain_runs, 1, 1),
+            ('general', general_runs, 1, 1),
             # Only stability and error are read from this one, not time: both cores.
             ('stability', stability_runs, 2, 1)]
     for name, make, workers, repeat in plan:

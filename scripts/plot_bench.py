@@ -69,7 +69,9 @@ def load(path):
                     'iterations', 'passes', 'mass_ratio', 'end_drop', 'max_penetration',
                     'spring_stiffness', 'final_structural_max_strain',
                     'final_structural_mean_strain', 'project_ms', 'predict_ms', 'update_ms',
-                    'cpu_ms_per_step', 'last_second_median_structural_max_strain'):
+                    'cpu_ms_per_step', 'last_second_median_structural_max_strain',
+                    'median_structural_max_strain_last_1s',
+                    'median_structural_mean_strain_last_1s'):
             row[key] = number(row.get(key))
         row['ok'] = row.get('exit_status') == '0' and row.get('finite') == '1'
     return rows
@@ -177,6 +179,118 @@ def pareto_figure(rows, metrics, title, path):
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+# The general sweep (issue 50): one panel per scene, in the sweep's order, every series on every
+# panel (Bullet included). (label, title) of the panels; scenes not listed come after, by label.
+GENERAL_PANELS = [
+    ('held_corners', 'held_corners.yaml: 50 x 50, one diagonal, 0.5 % closer'),
+    ('held_50_2pct', 'bench/held_50_2pct: 50 x 50, one diagonal, 2 % closer'),
+    ('held_50_both_05pct', 'bench/held_50_both_05pct: 50 x 50, both diagonals, 0.5 %'),
+    ('held_50_both_2pct', 'bench/held_50_both_2pct: 50 x 50, both diagonals, 2 %'),
+    ('held_100_05pct', 'bench/held_100_05pct: 100 x 100, one diagonal, 0.5 %'),
+    ('held_100_2pct', 'bench/held_100_2pct: 100 x 100, one diagonal, 2 %'),
+    ('tshirt_held', 'tshirt_held.yaml: T-shirt held at its shoulders'),
+]
+# Metrics of a general panel: (column, how it is drawn, legend suffix).
+GENERAL_METRICS = [('final_structural_max_strain', '-', 'final max'),
+                   ('median_structural_max_strain_last_1s', '--', 'median of the max, last 1 s'),
+                   ('final_structural_mean_strain', ':', 'final mean')]
+
+
+def general_figure(rows, path):
+    labels = [label for label, _ in GENERAL_PANELS if any(r.get('label') == label for r in rows)]
+    labels += sorted({r.get('label') for r in rows} - set(labels) - {None, ''})
+    titles = dict(GENERAL_PANELS)
+    columns = 4 if len(labels) > 4 else len(labels)
+    lines = (len(labels) + columns - 1) // columns
+    fig, axes = plt.subplots(lines, columns, figsize=(5.0 * columns, 4.4 * lines), squeeze=False)
+    for ax in axes.flat[len(labels):]:
+        ax.axis('off')
+    for ax, label in zip(axes.flat, labels):
+        mine = [r for r in rows if r.get('label') == label]
+        for name in curves_of(mine):
+            style = STYLE.get(name, dict(color='gray', marker='.'))
+            runs = sorted([r for r in mine if r['curve'] == name and converged_run(r)],
+                          key=lambda r: r['wall_ms_per_step'])
+            failed = len([r for r in mine if r['curve'] == name and not converged_run(r)])
+            for metric, line, suffix in GENERAL_METRICS:
+                points = [(r['wall_ms_per_step'], r[metric]) for r in runs
+                          if r[metric] > 0 and not math.isnan(r[metric])]
+                if not points:
+                    continue
+                ax.plot([p[0] for p in points], [p[1] for p in points], line,
+                        color=style['color'], marker=style['marker'], markersize=4,
+                        linewidth=1.2, fillstyle='full' if line == '-' else 'none',
+                        label='%s, %s%s' % (name, suffix, ' (%d failed)' % failed if failed
+                                            else ''))
+            for r in runs:
+                if r['method'] == 'bullet' or r is runs[-1]:
+                    ax.annotate('%dx%d' % (r['substeps'], r['iterations']),
+                                (r['wall_ms_per_step'], r['final_structural_max_strain']),
+                                fontsize=6, color=style['color'], xytext=(3, 3),
+                                textcoords='offset points')
+        ax.axhline(SWING_MAX_TARGET, color='gray', linestyle='-', linewidth=0.8)
+        ax.axhline(SWING_MEAN_TARGET, color='gray', linestyle=':', linewidth=0.8)
+        ax.set_xscale('log')
+        ax.set_yscale('log')
+        ax.set_title(titles.get(label, label), fontsize=8.5)
+        ax.set_xlabel('wall ms per step (one thread)', fontsize=8)
+        ax.set_ylabel('structural strain', fontsize=8)
+        ax.grid(True, which='both', alpha=0.25)
+        ax.tick_params(labelsize=7)
+    axes.flat[0].legend(fontsize=6, loc='lower left')
+    fig.suptitle('The general case (issue 50): corners held by grippers closer than the width, '
+                 'and the T-shirt held at its shoulders; 3 s at 60 Hz. Targets: 1 % max (solid '
+                 'grey), 0.1 % mean (dotted grey); pbd_cloth and Bullet on the same links, the '
+                 'held particles moved alike', fontsize=9)
+    fig.tight_layout(rect=(0, 0, 1, 0.96))
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
+def general_summary(add, general):
+    """Every run of the general sweep, per scene, with its ratio to Bullet 16 x 10 on that scene."""
+    add('')
+    add('## The general case (sweep_general.csv, doc/general_pareto.png)')
+    add('')
+    add('Corners held by two grippers closer than the cloth\'s width (config/held_corners.yaml and '
+        'config/bench/held_*.yaml) and the T-shirt held at its shoulders (config/tshirt_held.yaml), '
+        '3 s. Strains of the structural links (every edge of the shirt): final, and the median over '
+        'every step of the last second. Targets: max <= 1 % and mean <= 0.1 %, both readings. '
+        'Ratio: wall ms per step over Bullet 16 x 10\'s on the same scene in the same run.')
+    titles = dict(GENERAL_PANELS)
+    labels = [label for label, _ in GENERAL_PANELS if any(r.get('label') == label
+                                                          for r in general)]
+    labels += sorted({r.get('label') for r in general} - set(labels) - {None, ''})
+    for label in labels:
+        mine = [r for r in general if r.get('label') == label]
+        peer = next((r for r in mine if r['method'] == 'bullet' and r['substeps'] == 16 and
+                     r['iterations'] == 10 and r['ok']), None)
+        add('')
+        add('### %s' % titles.get(label, label))
+        add('')
+        add('| curve | setting | wall ms/step | final max | final mean | median max, last 1 s | '
+            'median mean, last 1 s | meets both | / Bullet 16x10 |')
+        add('|---|---|---|---|---|---|---|---|---|')
+        for r in sorted(mine, key=lambda r: (r['curve'] != 'bullet', r['curve'],
+                                              r['wall_ms_per_step'])):
+            if not r['ok']:
+                add('| %s | %dx%d | failed (%s) | | | | | | |' % (
+                    r['curve'], r['substeps'], r['iterations'], r.get('error') or
+                    r.get('exit_status')))
+                continue
+            meets = (r['final_structural_max_strain'] <= SWING_MAX_TARGET and
+                     r['final_structural_mean_strain'] <= SWING_MEAN_TARGET and
+                     r['median_structural_max_strain_last_1s'] <= SWING_MAX_TARGET and
+                     r['median_structural_mean_strain_last_1s'] <= SWING_MEAN_TARGET)
+            ratio = ('%.2f' % (r['wall_ms_per_step'] / peer['wall_ms_per_step'])
+                     if peer else '-')
+            add('| %s | %dx%d | %.3g | %.3g | %.3g | %.3g | %.3g | %s | %s |' % (
+                r['curve'], r['substeps'], r['iterations'], r['wall_ms_per_step'],
+                r['final_structural_max_strain'], r['final_structural_mean_strain'],
+                r['median_structural_max_strain_last_1s'],
+                r['median_structural_mean_strain_last_1s'], 'yes' if meets else 'no', ratio))
 
 
 def chain_figure(rows, path):
@@ -747,7 +861,7 @@ def extra_summaries(add, swinging100, fabric, towel):
 
 
 def summary(data_dir, hanging, drape, chain, stability, env_text, swinging=(), swinging100=(),
-            fabric=(), towel=()):
+            fabric=(), towel=(), general=()):
     out = []
     add = out.append
     add('# Bench summary')
@@ -758,8 +872,8 @@ def summary(data_dir, hanging, drape, chain, stability, env_text, swinging=(), s
         'those of the last run; a run with `--only` rewrites only its own CSVs, so compare the '
         'times of the CSVs written by one run.')
     add('')
-    for name in ('hanging', 'swinging', 'swinging100', 'fabric', 'towel', 'drape', 'chain',
-                 'stability'):
+    for name in ('hanging', 'swinging', 'swinging100', 'general', 'fabric', 'towel', 'drape',
+                 'chain', 'stability'):
         path = os.path.join(data_dir, 'sweep_%s.csv' % name)
         if os.path.exists(path):
             with open(path, newline='') as handle:
@@ -881,6 +995,8 @@ def summary(data_dir, hanging, drape, chain, stability, env_text, swinging=(), s
     if swinging:
         swinging_summary(add, swinging)
     extra_summaries(add, swinging100, fabric, towel)
+    if general:
+        general_summary(add, general)
 
     if drape:
         add('')
@@ -987,7 +1103,9 @@ def main():
     towel = load(os.path.join(data, 'sweep_towel.csv'))
     chain = load(os.path.join(data, 'sweep_chain.csv'))
     stability = load(os.path.join(data, 'sweep_stability.csv'))
-    if not (hanging or swinging or swinging100 or fabric or towel or drape or chain or stability):
+    general = load(os.path.join(data, 'sweep_general.csv'))
+    if not (hanging or swinging or swinging100 or fabric or towel or drape or chain or stability
+            or general):
         sys.exit('plot_bench: no sweep_*.csv in %s (run scripts/run_bench first)' % data)
     written = []
     if hanging:
@@ -1018,6 +1136,10 @@ def main():
                                 'strain', SWING_MAX_TARGET))
             pareto_figure(rows, metrics, title, path)
             written.append(path)
+    if general:
+        path = os.path.join(data, 'general_pareto.png')
+        general_figure(general, path)
+        written.append(path)
     if drape:
         path = os.path.join(data, 'pareto_drape.png')
         pareto_figure(drape, [('max_strain', 'max strain over the run', TARGET),
@@ -1043,7 +1165,7 @@ def main():
         with open(args.env) as handle:
             env_text = handle.read()
     text = summary(data, hanging, drape, chain, verdicts, env_text, swinging, swinging100, fabric,
-                   towel)
+                   towel, general)
     path = os.path.join(data, 'bench_summary.md')
     with open(path, 'w') as handle:
         handle.write(text)

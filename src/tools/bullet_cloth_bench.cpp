@@ -32,6 +32,7 @@
 #include "pbd_cloth/scene/scene_yaml.h"
 #include "pbd_cloth/sim/cloth_builder.h"
 #include "pbd_cloth/sim/colliders.h"
+#include "pbd_cloth/sim/grippers.h"
 #include "pbd_cloth/sim/metrics.h"
 
 namespace {
@@ -48,7 +49,13 @@ const char kUsage[] =
     "the same stretch links (final_structural_max_strain, final_structural_mean_strain: the final\n"
     "state's strain of the structural links only; last_second_median_structural_max_strain:\n"
     "the median of its max over the samples of the last second, NaN without samples or when the\n"
-    "cloth blows up). Only the Bullet step calls are timed. max_strain, max_penetration\n"
+    "cloth blows up; median_structural_max_strain_last_1s, median_structural_mean_strain_last_1s:\n"
+    "the medians over every step of the last second; every strain leaves out links between two\n"
+    "pinned or held particles). A gripper that grasps at t = 0 holds its particles as moving\n"
+    "pins: the particles within its radius at t = 0 get mass 0 and follow its trajectory at their\n"
+    "offsets in its frame, interpolated across the internal steps of each step as pbd_cloth moves\n"
+    "its held particles across the substeps. Only the Bullet step calls (and the held\n"
+    "particles' moves between them) are timed. max_strain, max_penetration\n"
     "and max_self_intersections are maxima over the samples (every step for <= 5000 particles,\n"
     "every 10th otherwise, and the last step); the other metrics are those of the final state.\n"
     "\n"
@@ -73,8 +80,9 @@ const char kUsage[] =
     "  --mesh <file.obj>      final cloth as a Wavefront OBJ\n"
     "  --quiet                no progress message on stderr\n"
     "  --help                 this text\n"
-    "Bullet is built in single precision (Debian's libbullet-dev). Grippers, granular particles,\n"
-    "tethers and the bounds box are not simulated (a warning says so); cloth self-collision is\n"
+    "Bullet is built in single precision (Debian's libbullet-dev). Grasps after t = 0, releases,\n"
+    "live gripper poses, granular particles, tethers and the bounds box are not simulated (a\n"
+    "warning says so); cloth self-collision is\n"
     "off (Bullet needs clusters for it). A diverged cloth (max strain > 10) reports\n"
     "self_intersections=-1: not counted.\n";
 
@@ -175,6 +183,106 @@ btTransform toBullet(const pbd_cloth::Pose& pose) {
                      toBullet(pose.position));
 }
 
+// Grippers that grasp at t = 0, as moving pins: the cloth particles within a gripper's radius of
+// its pose at t = 0 (trajectoryPose, as pbd_cloth's Grippers::changeGrasp takes them: free
+// particles, the first gripper's first) are held at their offsets in its frame. Each step they
+// move from where they are to where the gripper's trajectory puts them at the step's end,
+// linearly across the internal steps (the interpolation of pbd_cloth's solver across substeps).
+class HeldParticles {
+ public:
+  // Marks the held particles kinematic (inverse mass 0: Bullet mass 0, and the strain leaves out
+  // links between two of them). Returns the grippers that also grasp or release later, or grasp
+  // only later: those events are not simulated.
+  std::vector<std::string> grasp(const pbd_cloth::SceneConfig& scene,
+                                 pbd_cloth::Particles& particles) {
+    std::vector<std::string> unsupported;
+    for (const pbd_cloth::GripperConfig& gripper : scene.grippers) {
+      const std::vector<pbd_cloth::Waypoint>& trajectory = gripper.trajectory;
+      bool at_start = false, later_events = false;
+      for (const pbd_cloth::Waypoint& w : trajectory) {
+        if (w.grasp < 0) continue;
+        if (w.t <= 1e-9 && w.grasp == 1) {
+          at_start = true;
+        } else {
+          later_events = true;
+        }
+      }
+      if (later_events || !at_start) unsupported.push_back(gripper.name);
+      if (!at_start) continue;
+      Group group;
+      group.trajectory = &trajectory;
+      const pbd_cloth::Pose pose = pbd_cloth::trajectoryPose(trajectory, 0.0);
+      const Eigen::Quaterniond to_local = pose.orientation.conjugate();
+      for (int i = 0; i < particles.cloth_count; ++i) {
+        if (particles.isKinematic(i)) continue;  // pinned, or held by an earlier gripper
+        if ((particles.position[i] - pose.position).norm() > gripper.radius) continue;
+        group.particles.push_back(i);
+        group.offsets.push_back(to_local * (particles.position[i] - pose.position));
+        particles.inverse_mass[i] = 0.0;
+      }
+      groups_.push_back(std::move(group));
+    }
+    return unsupported;
+  }
+
+  bool empty() const { return groups_.empty(); }
+  int count() const {
+    int n = 0;
+    for (const Group& group : groups_) n += static_cast<int>(group.particles.size());
+    return n;
+  }
+
+  // Where the step ending at t_end puts each held particle; from[] is where they are (the last
+  // step's targets, or their start).
+  void beginStep(double t_end, const pbd_cloth::Particles& particles) {
+    for (Group& group : groups_) {
+      const pbd_cloth::Pose pose = pbd_cloth::trajectoryPose(*group.trajectory, t_end);
+      group.from.resize(group.particles.size());
+      group.to.resize(group.particles.size());
+      for (std::size_t k = 0; k < group.particles.size(); ++k) {
+        group.from[k] = started_ ? group.to[k] : particles.position[group.particles[k]];
+        group.to[k] = pose.position + pose.orientation * group.offsets[k];
+      }
+    }
+    started_ = true;
+  }
+
+  // Before internal step s of n (h s each): each held node at its place at the step's fraction
+  // s / n, with the velocity that takes it to its place at (s + 1) / n (Bullet moves every node by
+  // its velocity in the prediction and leaves mass-0 nodes there).
+  void place(btSoftBody* body, int s, int n, double h) const {
+    const double s0 = static_cast<double>(s) / n, s1 = static_cast<double>(s + 1) / n;
+    for (const Group& group : groups_) {
+      for (std::size_t k = 0; k < group.particles.size(); ++k) {
+        const Eigen::Vector3d x0 = (1.0 - s0) * group.from[k] + s0 * group.to[k];
+        const Eigen::Vector3d x1 = (1.0 - s1) * group.from[k] + s1 * group.to[k];
+        btSoftBody::Node& node = body->m_nodes[group.particles[k]];
+        node.m_x = toBullet(x0);
+        node.m_v = toBullet((x1 - x0) / h);
+      }
+    }
+  }
+
+  // After the step: each held node exactly at its target.
+  void finish(btSoftBody* body) const {
+    for (const Group& group : groups_) {
+      for (std::size_t k = 0; k < group.particles.size(); ++k) {
+        body->m_nodes[group.particles[k]].m_x = toBullet(group.to[k]);
+      }
+    }
+  }
+
+ private:
+  struct Group {
+    const std::vector<pbd_cloth::Waypoint>* trajectory = nullptr;
+    std::vector<int> particles;
+    std::vector<Eigen::Vector3d> offsets;  // in the gripper's frame at t = 0
+    std::vector<Eigen::Vector3d> from, to;
+  };
+  std::vector<Group> groups_;
+  bool started_ = false;
+};
+
 // A Bullet world holding the cloth and the scene's static obstacles. Members are declared in the
 // order Bullet needs them built; they are destroyed in reverse.
 class BulletCloth {
@@ -248,6 +356,8 @@ class BulletCloth {
       delete object;
     }
   }
+
+  btSoftBody* body() { return body_; }
 
   // One internal Bullet step of h s. stepSimulation(h, 0) takes exactly one internal step; N of
   // them are the same as stepSimulation(dt, N, dt / N) without its single-precision time
@@ -357,9 +467,6 @@ void warnAboutUnsupported(const pbd_cloth::SceneConfig& scene) {
   if (scene.granular.count > 0) {
     std::cerr << "bullet_cloth_bench: warning: granular particles are not simulated\n";
   }
-  if (!scene.grippers.empty()) {
-    std::cerr << "bullet_cloth_bench: warning: grippers are not simulated\n";
-  }
   if (scene.bounds.enabled) {
     std::cerr << "bullet_cloth_bench: warning: the bounds box is not simulated\n";
   }
@@ -384,6 +491,15 @@ int run(const Options& options) {
   pbd_cloth::Particles particles;
   pbd_cloth::ClothTopology topology;
   pbd_cloth::buildScene(scene, particles, topology);
+  // Grippers grasping at t = 0: their particles become mass-0 nodes that follow the trajectory.
+  HeldParticles held;
+  for (const std::string& name : held.grasp(scene, particles)) {
+    if (!options.quiet) {
+      std::cerr << "bullet_cloth_bench: warning: gripper '" << name
+                << "': only a grasp at t = 0 is simulated (its particles as moving pins); its "
+                   "other grasp and release events are not\n";
+    }
+  }
   pbd_cloth::Collisions collisions;  // only for maxPenetration against the same obstacles
   collisions.configure(collisionSettings(scene));
   collisions.prepare(particles, topology);
@@ -410,6 +526,7 @@ int run(const Options& options) {
   }
 
   pbd_cloth::bench::LastSecondStrain last_second(steps, scene.step_rate, sample_every);
+  pbd_cloth::bench::LastSecondStepStrain last_second_steps(steps, scene.step_rate);
   pbd_cloth::Metrics last = computeMetrics(scene, particles, topology, collisions);
   double max_strain = last.max_strain;
   double max_penetration = last.max_penetration;
@@ -423,10 +540,25 @@ int run(const Options& options) {
   while (done < steps) {
     const Clock::time_point begin = Clock::now();
     const std::clock_t cpu_begin = std::clock();
-    for (int s = 0; s < substeps; ++s) cloth.internalStep(h);
+    if (held.empty()) {
+      for (int s = 0; s < substeps; ++s) cloth.internalStep(h);
+    } else {
+      held.beginStep((done + 1) * dt, particles);
+      for (int s = 0; s < substeps; ++s) {
+        held.place(cloth.body(), s, substeps, h);
+        cloth.internalStep(h);
+      }
+      held.finish(cloth.body());
+    }
     step_cpu += std::clock() - cpu_begin;
     step_seconds += std::chrono::duration<double>(Clock::now() - begin).count();
     ++done;
+    if (last_second_steps.counts(done)) {
+      cloth.read(particles);
+      double structural_max = 0.0, structural_mean = 0.0;
+      pbd_cloth::computeStructuralStrain(particles, topology, structural_max, structural_mean);
+      last_second_steps.add(structural_max, structural_mean);
+    }
     if (done % sample_every != 0 && done != steps) continue;
     cloth.read(particles);
     last = computeMetrics(scene, particles, topology, collisions);
@@ -470,13 +602,15 @@ int run(const Options& options) {
       "max_self_intersections=%d sample_every=%d bullet_links=%d bullet_viterations=%d "
       "bullet_diterations=%d bullet_kLST=%g bullet_bending=%d final_structural_max_strain=%.9g "
       "final_structural_mean_strain=%.9g cpu_ms_per_step=%.6g "
-      "last_second_median_structural_max_strain=%.9g\n",
+      "last_second_median_structural_max_strain=%.9g median_structural_max_strain_last_1s=%.9g "
+      "median_structural_mean_strain_last_1s=%.9g grasped_particles=%d\n",
       1e3 * step_seconds * per_step, max_strain, last.mean_strain, max_penetration,
       last.self_intersections, last.energy, last.finite ? 1 : 0, done, done * dt,
       substeps * piterations, substeps, piterations, particle_count, max_self_intersections,
       sample_every, cloth.linkCount(), knobs.viterations, knobs.diterations, knobs.link_stiffness,
       knobs.bending ? 1 : 0, last.structural_max_strain, last.structural_mean_strain,
-      1e3 * static_cast<double>(step_cpu) / CLOCKS_PER_SEC * per_step, last_second.median());
+      1e3 * static_cast<double>(step_cpu) / CLOCKS_PER_SEC * per_step, last_second.median(),
+      last_second_steps.medianMax(), last_second_steps.medianMean(), held.count());
   return 0;
 }
 

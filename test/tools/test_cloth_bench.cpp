@@ -473,6 +473,57 @@ TEST(ShippedScenes, EveryConfigRunsInClothBench) {
   }
 }
 
+#ifdef BULLET_CLOTH_BENCH
+// bullet_cloth_bench holds what a gripper grasps at t = 0 as moving pins: the corners of
+// config/held_corners.yaml are where the grippers put them, halfway along their 0.1 s move at
+// 0.05 s and at its end afterwards, as in cloth_bench; and every config/bench/ scene runs.
+TEST(BulletClothBench, GrippersGraspingAtTheStartHoldTheirParticlesOnTheirTrajectories) {
+  const std::string positions = ::testing::TempDir() + "bullet_held.csv";
+  for (const double duration : {0.05, 0.5}) {
+    const BenchRun run = runShell(
+        std::string(BULLET_CLOTH_BENCH) + " --config " + PBD_CLOTH_SOURCE_DIR +
+        "/config/held_corners.yaml --duration " + std::to_string(duration) +
+        " --set bullet.substeps=4 --set bullet.piterations=2" + " --positions " + positions);
+    ASSERT_EQ(run.status, 0) << run.out;
+    EXPECT_EQ(keyValues(run.out).at("grasped_particles"), "2") << run.out;
+    EXPECT_EQ(run.out.find("not simulated"), std::string::npos) << run.out;
+    std::istringstream lines(readFile(positions));
+    std::map<int, std::array<double, 3>> at;
+    for (std::string line; std::getline(lines, line);) {
+      std::array<double, 3> x{};
+      int index = -1;
+      if (std::sscanf(line.c_str(), "%d,%lf,%lf,%lf", &index, &x[0], &x[1], &x[2]) == 4) {
+        at[index] = x;
+      }
+    }
+    ASSERT_EQ(at.size(), 2500u);
+    const double inward = duration < 0.1 ? 0.00125 : 0.0025;  // m, each corner
+    EXPECT_NEAR(at[0][0], inward, 1e-6) << duration;          // single precision: 1e-7 m at 1 m
+    EXPECT_NEAR(at[49][0], 1.0 - inward, 1e-6) << duration;
+    for (int corner : {0, 49}) {
+      EXPECT_NEAR(at[corner][1], 0.0, 1e-6) << corner;
+      EXPECT_NEAR(at[corner][2], 1.5, 1e-6) << corner;
+    }
+    if (duration > 0.1) EXPECT_LT(at[2450][2], 1.0) << "the free corners swing down";
+  }
+  const BenchRun listing = runShell(
+      std::string("ls ") + PBD_CLOTH_SOURCE_DIR + "/config/bench/*.yaml " + PBD_CLOTH_SOURCE_DIR +
+      "/config/held_corners.yaml " + PBD_CLOTH_SOURCE_DIR + "/config/tshirt_held.yaml");
+  std::istringstream lines(listing.out);
+  for (std::string path; std::getline(lines, path);) {
+    const BenchRun run =
+        runShell(std::string(BULLET_CLOTH_BENCH) + " --config " + path + " --duration 0.05" +
+                 " --quiet --set bullet.substeps=2 --set bullet.piterations=1");
+    ASSERT_EQ(run.status, 0) << path << "\n" << run.out;
+    const auto values = keyValues(run.out);
+    EXPECT_EQ(values.at("finite"), "1") << path;
+    EXPECT_NE(values.at("grasped_particles"), "0") << path;
+    EXPECT_TRUE(std::isfinite(std::stod(values.at("median_structural_mean_strain_last_1s"))))
+        << path;
+  }
+}
+#endif
+
 TEST(SourceStyle, EveryCppFileIsClangFormatted) {
   const BenchRun run = runShell(std::string("cd '") + PBD_CLOTH_SOURCE_DIR +
                                 "' && find -L src include test \\( -name '*.cpp' -o -name '*.h' \\)"
