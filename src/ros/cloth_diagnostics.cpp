@@ -71,6 +71,13 @@ void ClothDiagnostics::simulationStatus(diagnostic_updater::DiagnosticStatusWrap
                     "factor %.2f, a step takes %.1f ms; lower step_rate, substeps or the cloth "
                     "size, or slow /clock down)",
                     health_.clock_factor, health_.real_time_factor, 1e3 * mean_step);
+  } else if (health_.target_budget_exhausted) {
+    status.summaryf(DiagnosticStatus::WARN,
+                    "accuracy target not met within the budget: target max strain %.3g %%, "
+                    "reached %.3g %%; target penetration %.3g m, reached %.3g m; at "
+                    "solver.max_substeps %d (raise it, lower step_rate, or relax the target)",
+                    100.0 * health_.target_max_strain, 100.0 * health_.structural_max_strain,
+                    health_.target_penetration, health_.max_penetration, health_.max_substeps);
   } else if (health_.degenerate_constraints > 0) {
     status.summaryf(DiagnosticStatus::WARN,
                     "%d stretch constraint(s) skipped in the last step: their particles coincide",
@@ -101,6 +108,14 @@ void ClothDiagnostics::simulationStatus(diagnostic_updater::DiagnosticStatusWrap
   status.add("substeps", health_.substeps);
   status.add("iterations (last step)", health_.iterations);
   status.add("max strain", health_.max_strain);
+  status.add("structural max strain", health_.structural_max_strain);
+  if (health_.target_max_strain > 0.0 || health_.target_penetration > 0.0) {
+    status.add("target max strain (solver.target_max_strain)", health_.target_max_strain);
+    status.add("target penetration (m, solver.target_penetration)", health_.target_penetration);
+    status.add("target met (last step)", health_.target_met ? "yes" : "no");
+    status.add("substeps run (last step, every attempt)", health_.substeps_run);
+    status.add("budget (solver.max_substeps)", health_.max_substeps);
+  }
   status.add("max penetration (m)", health_.max_penetration);
   status.add("degenerate constraints (last step)", health_.degenerate_constraints);
   status.add("truncated self-collision searches (since last report)", truncated_searches_);

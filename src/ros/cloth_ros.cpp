@@ -623,6 +623,13 @@ void ClothRos::diagnosticsCallback(const ros::WallTimerEvent& /*event*/) {
   health.max_strain = stats.max_strain;
   health.max_penetration = stats.max_penetration;
   health.degenerate_constraints = static_cast<int>(stats.degenerate_constraints);
+  health.target_max_strain = stats.target_max_strain;
+  health.target_penetration = stats.target_penetration;
+  health.structural_max_strain = stats.structural_max_strain;
+  health.target_met = stats.target_met;
+  health.target_budget_exhausted = stats.target_budget_exhausted;
+  health.max_substeps = sim_->scene().solver.max_substeps;
+  health.substeps_run = static_cast<int>(stats.substeps_run);
   health.finite = allFinite(sim_->particles());
   health.restored_steps = sim_->faultGuard().restoredSteps();
   if (health.restored_steps > 0) {
@@ -776,10 +783,12 @@ SolverTuning ClothRos::reconfigure(const SolverTuning& requested, unsigned group
   const SolverTuning now = tuningFromSimulation(*sim_);
   ROS_INFO(
       "Solver tuning from the next step: %d substeps, %d iterations, tolerance %g m, %s, "
-      "relaxation %g, damping %g 1/s, compliance stretch %g bend %g, friction %g/%g.",
+      "relaxation %g, damping %g 1/s, compliance stretch %g bend %g, friction %g/%g, target max "
+      "strain %g, target penetration %g m, substeps %d..%d.",
       now.substeps, now.iterations, now.tolerance, now.ordering == 1 ? "jacobi" : "gauss_seidel",
       now.relaxation, now.damping, now.stretch_compliance, now.bend_compliance, now.friction_static,
-      now.friction_kinetic);
+      now.friction_kinetic, now.target_max_strain, now.target_penetration, now.min_substeps,
+      now.max_substeps);
   return now;
 }
 

@@ -111,6 +111,17 @@ void RosConversions::toStatsMessage(const Simulation& sim, SolverStats& msg) {
   msg.truncated_self_collision_searches =
       static_cast<std::uint32_t>(sim.collisions().stats().truncated_searches);
   msg.restored_steps = static_cast<std::uint32_t>(sim.faultGuard().restoredSteps());
+  const Simulation::AccuracyReport& accuracy = sim.accuracy();
+  msg.target_max_strain = sim.scene().solver.target_max_strain;
+  msg.target_penetration = sim.scene().solver.target_penetration;
+  double structural_mean = 0.0;
+  computeStructuralStrain(sim.particles(), sim.topology(), msg.structural_max_strain,
+                          structural_mean);
+  msg.target_met = accuracy.target_met;
+  msg.target_budget_exhausted = accuracy.budget_exhausted;
+  msg.substeps_run =
+      static_cast<std::uint32_t>(accuracy.substeps_run > 0 ? accuracy.substeps_run : msg.substeps);
+  msg.redone = static_cast<std::uint32_t>(accuracy.redos);
   msg.real_time_factor = 0.0;
   msg.rejected_inputs = 0;
 }

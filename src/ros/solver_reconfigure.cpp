@@ -20,6 +20,10 @@ void writeInto(const SolverTuning& tuning, Config& config) {
   config.ordering = tuning.ordering;
   config.relaxation = tuning.relaxation;
   config.damping = tuning.damping;
+  config.target_max_strain = tuning.target_max_strain;
+  config.target_penetration = tuning.target_penetration;
+  config.min_substeps = tuning.min_substeps;
+  config.max_substeps = tuning.max_substeps;
   config.stretch_compliance = tuning.stretch_compliance;
   config.bend_compliance = tuning.bend_compliance;
   config.friction_static = tuning.friction_static;
@@ -40,6 +44,10 @@ SolverTuning fromConfig(const Config& config) {
   tuning.ordering = config.ordering;
   tuning.relaxation = config.relaxation;
   tuning.damping = config.damping;
+  tuning.target_max_strain = config.target_max_strain;
+  tuning.target_penetration = config.target_penetration;
+  tuning.min_substeps = config.min_substeps;
+  tuning.max_substeps = config.max_substeps;
   tuning.stretch_compliance = config.stretch_compliance;
   tuning.bend_compliance = config.bend_compliance;
   tuning.friction_static = config.friction_static;

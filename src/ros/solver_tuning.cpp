@@ -14,6 +14,10 @@ SolverTuning tuningFromSimulation(const Simulation& sim) {
   tuning.ordering = solver.ordering == Ordering::kJacobi ? 1 : 0;
   tuning.relaxation = solver.relaxation;
   tuning.damping = solver.damping;
+  tuning.target_max_strain = solver.target_max_strain;
+  tuning.target_penetration = solver.target_penetration;
+  tuning.min_substeps = solver.min_substeps;
+  tuning.max_substeps = solver.max_substeps;
   tuning.stretch_compliance = cloth.stretch_compliance;
   tuning.bend_compliance = cloth.bend_compliance;
   tuning.friction_static = cloth.friction.static_coefficient;
@@ -42,6 +46,10 @@ bool applyTuning(const SolverTuning& tuning, unsigned groups, Simulation& sim,
     solver.ordering = tuning.ordering == 1 ? Ordering::kJacobi : Ordering::kGaussSeidel;
     solver.relaxation = tuning.relaxation;
     solver.damping = tuning.damping;
+    solver.target_max_strain = tuning.target_max_strain;
+    solver.target_penetration = tuning.target_penetration;
+    solver.min_substeps = tuning.min_substeps;
+    solver.max_substeps = tuning.max_substeps;
     sim.setSolverConfig(solver);
   });
   attempt(kTuneCompliance,

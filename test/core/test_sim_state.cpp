@@ -336,13 +336,21 @@ TEST(SimStateFile, BadFilesAreRefusedWithTheReason) {
   EXPECT_NE(reason.find("version " + std::to_string(kStateFileVersion + 1)), std::string::npos)
       << reason;
 
-  // Version 1 had no search window (the last 4 bytes): it still reads, with none chosen.
-  std::string first = bytes.substr(0, bytes.size() - 4);
+  // Version 1 had no search window and version 2 no chosen substeps (the last 4 bytes each):
+  // both still read, with none chosen.
+  std::string first = bytes.substr(0, bytes.size() - 8);
   first[8] = 1;
   std::istringstream old_file(first);
   ASSERT_TRUE(readState(old_file, read, reason)) << reason;
   EXPECT_EQ(read.search_window, 0);
+  EXPECT_EQ(read.chosen_substeps, 0);
   EXPECT_TRUE(sameBits(read.position, state.position));
+  std::string second = bytes.substr(0, bytes.size() - 4);
+  second[8] = 2;
+  std::istringstream second_file(second);
+  ASSERT_TRUE(readState(second_file, read, reason)) << reason;
+  EXPECT_EQ(read.search_window, state.search_window);
+  EXPECT_EQ(read.chosen_substeps, 0);
 
   std::istringstream trailing(bytes + "x");
   EXPECT_FALSE(readState(trailing, read, reason));

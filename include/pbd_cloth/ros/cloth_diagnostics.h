@@ -40,6 +40,15 @@ struct SimulationHealth {
   double max_strain = 0.0;
   double max_penetration = 0.0;    // m
   int degenerate_constraints = 0;  // skipped in the last step (coincident particles)
+  // Accuracy on demand (the last step): the targets (0: none), what was reached, whether the
+  // budget (solver.max_substeps) could not meet them.
+  double target_max_strain = 0.0;
+  double target_penetration = 0.0;
+  double structural_max_strain = 0.0;
+  bool target_met = true;
+  bool target_budget_exhausted = false;
+  int max_substeps = 0;
+  int substeps_run = 0;
   bool finite = true;
   // Steps undone by fault recovery since start, and the latest one's fault (Simulation).
   std::uint64_t restored_steps = 0;

@@ -20,6 +20,10 @@ struct SolverTuning {
   int ordering = 0;                 // solver.ordering: 0 gauss_seidel, 1 jacobi
   double relaxation = 1.0;          // solver.relaxation
   double damping = 0.0;             // solver.damping (1/s)
+  double target_max_strain = 0.0;   // solver.target_max_strain (0: fixed substeps)
+  double target_penetration = 0.0;  // solver.target_penetration (m)
+  int min_substeps = 1;             // solver.min_substeps
+  int max_substeps = 200;           // solver.max_substeps
   double stretch_compliance = 0.0;  // cloth.stretch_compliance (m/N)
   double bend_compliance = 1e-3;    // cloth.bend_compliance
   double friction_static = 0.5;     // cloth.friction.static

@@ -30,7 +30,7 @@ class AccuracyController {
  public:
   static constexpr double kAim = 0.75;    // the ratio the substeps are chosen for
   static constexpr double kMargin = 0.5;  // below it, fewer substeps
-  static constexpr double kRedo = 1.0;     // above it, the step runs again
+  static constexpr double kRedo = 1.0;    // above it, the step runs again
   static constexpr int kMaxRedos = 2;
 
   // Takes the targets and range; the substeps start at solver.substeps (clamped to the range) on

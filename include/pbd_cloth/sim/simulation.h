@@ -112,15 +112,15 @@ class Simulation {
   // step reached against the targets. Without a target, only `active` (false) and `substeps`.
   struct AccuracyReport {
     bool active = false;
-    double target_max_strain = 0.0;    // solver.target_max_strain (0: none)
-    double target_penetration = 0.0;   // solver.target_penetration (m, 0: none)
+    double target_max_strain = 0.0;      // solver.target_max_strain (0: none)
+    double target_penetration = 0.0;     // solver.target_penetration (m, 0: none)
     double structural_max_strain = 0.0;  // reached by the last step (its final attempt)
-    double max_penetration = 0.0;      // m; measured only with a penetration target
-    bool target_met = true;            // the last step met every target
-    bool budget_exhausted = false;     // ... did not, at solver.max_substeps
-    int substeps = 0;                  // of the last step's final attempt
-    int substeps_run = 0;              // over all its attempts (its cost)
-    int redos = 0;                     // times the last step was run again
+    double max_penetration = 0.0;        // m; measured only with a penetration target
+    bool target_met = true;              // the last step met every target
+    bool budget_exhausted = false;       // ... did not, at solver.max_substeps
+    int substeps = 0;                    // of the last step's final attempt
+    int substeps_run = 0;                // over all its attempts (its cost)
+    int redos = 0;                       // times the last step was run again
   };
   const AccuracyReport& accuracy() const { return accuracy_report_; }
   const AccuracyController& accuracyController() const { return accuracy_; }

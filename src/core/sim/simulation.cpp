@@ -315,7 +315,8 @@ void Simulation::solveStep(double dt) {
     }
     report.redos = attempt;
     report.target_met = AccuracyController::met(ratio);
-    report.budget_exhausted = !report.target_met && accuracy_.substeps() >= scene_.solver.max_substeps;
+    report.budget_exhausted =
+        !report.target_met && accuracy_.substeps() >= scene_.solver.max_substeps;
     accuracy_.update(ratio);
     break;
   }
