@@ -80,9 +80,15 @@ TEST(AccuracyController, RaisesOverTheTargetAndLowersSlowlyUnderIt) {
   EXPECT_TRUE(far.redo(1000.0, 0));
   EXPECT_EQ(far.substeps(), 40);
   EXPECT_FALSE(far.redo(1000.0, AccuracyController::kMaxRedos));  // no more attempts
-  // Within the band: unchanged; well under it: an eighth fewer a step, never under the minimum.
+  // Within the band: unchanged; well under it for kCalmSteps steps: then an eighth fewer a step,
+  // never under the minimum; a step back in the band starts the count again.
   const int before = far.substeps();
   far.update(0.9);
+  EXPECT_EQ(far.substeps(), before);
+  for (int k = 0; k + 1 < AccuracyController::kCalmSteps; ++k) far.update(0.0);
+  EXPECT_EQ(far.substeps(), before);
+  far.update(0.9);
+  for (int k = 0; k + 1 < AccuracyController::kCalmSteps; ++k) far.update(0.0);
   EXPECT_EQ(far.substeps(), before);
   far.update(0.0);
   EXPECT_EQ(far.substeps(), before - before / 8);

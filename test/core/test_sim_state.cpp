@@ -336,16 +336,16 @@ TEST(SimStateFile, BadFilesAreRefusedWithTheReason) {
   EXPECT_NE(reason.find("version " + std::to_string(kStateFileVersion + 1)), std::string::npos)
       << reason;
 
-  // Version 1 had no search window and version 2 no chosen substeps (the last 4 bytes each):
-  // both still read, with none chosen.
-  std::string first = bytes.substr(0, bytes.size() - 8);
+  // Version 1 had no search window (4 bytes) and version 2 no chosen substeps and calm steps (8
+  // bytes, the last): both still read, with none chosen.
+  std::string first = bytes.substr(0, bytes.size() - 12);
   first[8] = 1;
   std::istringstream old_file(first);
   ASSERT_TRUE(readState(old_file, read, reason)) << reason;
   EXPECT_EQ(read.search_window, 0);
   EXPECT_EQ(read.chosen_substeps, 0);
   EXPECT_TRUE(sameBits(read.position, state.position));
-  std::string second = bytes.substr(0, bytes.size() - 4);
+  std::string second = bytes.substr(0, bytes.size() - 8);
   second[8] = 2;
   std::istringstream second_file(second);
   ASSERT_TRUE(readState(second_file, read, reason)) << reason;

@@ -15,8 +15,10 @@
 //   and when r > kRedo (far over) the step is run again from its start with those substeps, at
 //   most kMaxRedos times: a state published that far over the target would break the user's
 //   error bound, and carrying the stretch into the next steps costs them more than one redo.
-// - r < kMargin (well under): the next step takes fewer, n sqrt(r / kAim), by at most an eighth a
-//   step, so a calm moment does not drop the effort the next jerk needs at once.
+// - r < kMargin (well under) for kCalmSteps steps in a row: the next step takes fewer,
+//   n sqrt(r / kAim), by at most an eighth a step, so a calm moment does not drop the effort the
+//   next jerk needs at once (lowering at once made a swinging cloth cycle: lower, overshoot, run
+//   again; doc/journal.md "2026-12-07: Accuracy on demand").
 // - else: the same substeps.
 // Every decision reads the simulated state alone, never the wall time: the same inputs give the
 // same results to the bit, and a data set made with a target can be replayed.
@@ -32,6 +34,7 @@ class AccuracyController {
   static constexpr double kMargin = 0.5;  // below it, fewer substeps
   static constexpr double kRedo = 1.0;    // above it, the step runs again
   static constexpr int kMaxRedos = 2;
+  static constexpr int kCalmSteps = 10;  // steps well under the target before fewer substeps
 
   // Takes the targets and range; the substeps start at solver.substeps (clamped to the range) on
   // the first configuration and whenever the targets are switched on.
@@ -39,8 +42,9 @@ class AccuracyController {
   bool active() const { return active_; }
   // Substeps for the next step (or the next attempt of this one).
   int substeps() const { return substeps_; }
-  // A restored state's choice (saved_state.h), clamped to the range.
-  void setSubsteps(int substeps);
+  // A restored state's choice and count (saved_state.h), the substeps clamped to the range.
+  void restore(int substeps, int calm_steps);
+  int calmSteps() const { return calm_steps_; }
   double targetStrain() const { return target_strain_; }
   double targetPenetration() const { return target_penetration_; }
   bool measuresPenetration() const { return target_penetration_ > 0.0; }
@@ -64,6 +68,7 @@ class AccuracyController {
   int min_substeps_ = 1;
   int max_substeps_ = 1;
   int substeps_ = 1;
+  int calm_steps_ = 0;  // steps in a row with r < kMargin
 };
 
 }  // namespace pbd_cloth

@@ -61,13 +61,14 @@ struct SimulationState {
   // The substeps solver.target_max_strain chose for the next step (accuracy_controller.h); 0:
   // no target, or none chosen yet.
   int chosen_substeps = 0;
+  int calm_steps = 0;  // the controller's count of steps well under the target (the same header)
 };
 
 // The state file: "PBDSTATE", a format version (uint32), then the fields in the order of
 // SimulationState, every number in the machine's own binary (IEEE doubles, little-endian on every
 // platform ROS supports): nothing is rounded, so a state read back is the state written.
-// Version 2 added search_window at the end, version 3 chosen_substeps after it; older files still
-// read (those fields 0).
+// Version 2 added search_window at the end, version 3 chosen_substeps and calm_steps after it;
+// older files still read (those fields 0).
 constexpr std::uint32_t kStateFileVersion = 3;
 constexpr std::uint32_t kOldestStateFileVersion = 1;
 void writeState(std::ostream& out, const SimulationState& state);

@@ -13,12 +13,16 @@ void AccuracyController::configure(const SolverConfig& solver) {
   min_substeps_ = solver.min_substeps;
   max_substeps_ = std::max(solver.min_substeps, solver.max_substeps);
   active_ = target_strain_ > 0.0 || target_penetration_ > 0.0;
-  if (active_ && !was_active) substeps_ = solver.substeps;
+  if (active_ && !was_active) {
+    substeps_ = solver.substeps;
+    calm_steps_ = 0;
+  }
   substeps_ = std::clamp(substeps_, min_substeps_, max_substeps_);
 }
 
-void AccuracyController::setSubsteps(int substeps) {
+void AccuracyController::restore(int substeps, int calm_steps) {
   substeps_ = std::clamp(substeps, min_substeps_, max_substeps_);
+  calm_steps_ = calm_steps;
 }
 
 double AccuracyController::ratio(double strain, double penetration) const {
@@ -41,14 +45,16 @@ bool AccuracyController::redo(double ratio, int attempt) {
     return false;
   }
   substeps_ = raised(ratio);
+  calm_steps_ = 0;
   return true;
 }
 
 void AccuracyController::update(double ratio) {
   if (!active_) return;
+  calm_steps_ = ratio < kMargin ? calm_steps_ + 1 : 0;
   if (ratio > 1.0) {
     substeps_ = raised(ratio);
-  } else if (ratio < kMargin) {
+  } else if (calm_steps_ >= kCalmSteps) {
     const double wanted = std::floor(substeps_ * std::sqrt(ratio / kAim));
     const int most_fewer = std::max(1, substeps_ / 8);
     substeps_ = std::max({min_substeps_, substeps_ - most_fewer, static_cast<int>(wanted)});

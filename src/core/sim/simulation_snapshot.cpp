@@ -93,6 +93,7 @@ void Simulation::getState(SimulationState& state) const {
   collisions_.getMeshContacts(state.mesh_contacts);
   state.search_window = collisions_.adaptiveSearchWindow();
   state.chosen_substeps = accuracy_.active() ? accuracy_.substeps() : 0;
+  state.calm_steps = accuracy_.active() ? accuracy_.calmSteps() : 0;
 }
 
 std::string Simulation::checkState(const SimulationState& state) const {
@@ -160,6 +161,9 @@ std::string Simulation::checkState(const SimulationState& state) const {
     error = "search_window: " + std::to_string(state.search_window) + " is not in [0, " +
             std::to_string(kMaxPasses) + "] substeps";
   }
+  if (error.empty() && state.calm_steps < 0) {
+    error = "calm_steps: " + std::to_string(state.calm_steps) + " is negative";
+  }
   if (error.empty() && (state.chosen_substeps < 0 || state.chosen_substeps > kMaxPasses)) {
     error = "chosen_substeps: " + std::to_string(state.chosen_substeps) + " is not in [0, " +
             std::to_string(kMaxPasses) + "]";
@@ -218,7 +222,7 @@ bool Simulation::setState(const SimulationState& state, std::string& reason) {
   }
   collisions_.setMeshContacts(state.mesh_contacts);
   collisions_.setAdaptiveSearchWindow(state.search_window);
-  if (state.chosen_substeps > 0) accuracy_.setSubsteps(state.chosen_substeps);
+  if (state.chosen_substeps > 0) accuracy_.restore(state.chosen_substeps, state.calm_steps);
   kinematicSetChanged();  // tethers of the restored grasps
   collisions_.findCandidatesNow(particles_, topology_);
   state_measured_ = false;

@@ -181,6 +181,7 @@ void writeSolverPart(ByteWriter& w, const SimulationState& state) {
   }
   w.index(state.search_window);
   w.index(state.chosen_substeps);
+  w.index(state.calm_steps);
 }
 
 void readSolverPart(ByteReader& r, SimulationState& state) {
@@ -194,7 +195,10 @@ void readSolverPart(ByteReader& r, SimulationState& state) {
     c.point = r.vec("mesh contact point");
   }
   if (r.version() >= 2) state.search_window = r.index("search_window");
-  if (r.version() >= 3) state.chosen_substeps = r.index("chosen_substeps");
+  if (r.version() >= 3) {
+    state.chosen_substeps = r.index("chosen_substeps");
+    state.calm_steps = r.index("calm_steps");
+  }
 }
 
 std::vector<std::uint8_t> encodeState(const SimulationState& state) {
@@ -327,6 +331,7 @@ bool decodeSolverData(const std::vector<std::uint8_t>& data, SimulationState& st
   state.mesh_contacts = std::move(read.mesh_contacts);
   state.search_window = read.search_window;
   state.chosen_substeps = read.chosen_substeps;
+  state.calm_steps = read.calm_steps;
   return true;
 }
 
