@@ -153,17 +153,21 @@ inline SceneConfig loadScene(const CommonOptions& options) {
   return scene;
 }
 
-// --csv: one row per metric sample, under this header.
-inline void writeCsvHeader(std::ofstream& csv) {
+// --csv: one row per metric sample, under this header. A tool with columns of its own appends
+// them after these (more_columns: ",name,..."; cloth_bench's substeps_run,target_met), and each
+// row then ends with their values (more_values: ",value,...").
+inline void writeCsvHeader(std::ofstream& csv, const std::string& more_columns = "") {
   if (csv.is_open()) {
-    csv << "t,max_strain,mean_strain,energy,max_penetration,structural_max_strain\n";
+    csv << "t,max_strain,mean_strain,energy,max_penetration,structural_max_strain" << more_columns
+        << '\n';
   }
 }
 
-inline void writeCsvRow(std::ofstream& csv, double t, const Metrics& m) {
+inline void writeCsvRow(std::ofstream& csv, double t, const Metrics& m,
+                        const std::string& more_values = "") {
   if (!csv.is_open()) return;
   csv << t << ',' << m.max_strain << ',' << m.mean_strain << ',' << m.energy << ','
-      << m.max_penetration << ',' << m.structural_max_strain << '\n';
+      << m.max_penetration << ',' << m.structural_max_strain << more_values << '\n';
 }
 
 // The largest strain of the structural links over the run's last second: the median of its

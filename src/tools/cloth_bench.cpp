@@ -38,6 +38,12 @@ const char kUsage[] =
     "target_met_fraction (solver.target_max_strain / target_penetration: the fraction of the\n"
     "steps that met the targets; 1 without a target) mean_substeps (substeps run per step, every\n"
     "attempt of a step run again counted) redone_steps (steps a target ran again)\n"
+    "worst_structural_max_strain (the largest structural max strain over every step of the run,\n"
+    "whatever --sample-every says: <= a target means the target was met at every step)\n"
+    "controller_ms_per_step and controller_fraction (with a target: the controller's own work,\n"
+    "timed here on the state of each step as the core does it: the structural strain measured\n"
+    "once an attempt and the particles copied once an attempt, for the step's start and its\n"
+    "redos; its mean per step, and over wall_ms_per_step; 0 without a target)\n"
     "method substeps\n"
     "iterations ...).\n"
     "Only the step calls are timed (cpu_ms_per_step: their processor time, which leaves out\n"
@@ -66,9 +72,15 @@ const char kUsage[] =
     "  --set <key=value>      override a scene key before the run, e.g. solver.substeps=20,\n"
     "                         cloth.pinned=[0,49], grippers.0.radius=0.03; repeatable\n"
     "  --csv <file>           write t,max_strain,mean_strain,energy,max_penetration,\n"
-    "                         structural_max_strain rows (with a header) at t = 0 and at every\n"
-    "                         metric sample: every step for scenes of <= 5000 particles, else\n"
-    "                         every 10th step\n"
+    "                         structural_max_strain,substeps_run,target_met rows (with a header)\n"
+    "                         at t = 0 and at every metric sample: every step for scenes of <=\n"
+    "                         5000 particles, else every 10th step. substeps_run: the substeps\n"
+    "                         the steps since the row before ran (every attempt of a step run\n"
+    "                         again counted; 0 for slept steps), target_met: 1 when each of those\n"
+    "                         steps met solver.target_max_strain / target_penetration (always 1\n"
+    "                         without a target); with every step sampled, the step's own. The\n"
+    "                         structural_max_strain of a row is that of its step (with a target,\n"
+    "                         what the controller measured)\n"
     "  --sample-every <n>     sample the metrics every n steps instead (n >= 1)\n"
     "  --positions <file>     write the final positions as index,x,y,z lines (no header)\n"
     "  --mesh <file.obj>      write the final cloth as a Wavefront OBJ (v and 1-based f lines)\n"
@@ -216,6 +228,10 @@ struct BenchResult {
   double target_met_fraction = 1.0;
   double mean_substeps = 0.0;
   long long redone_steps = 0;
+  // The largest structural max strain over every step (not only the metric samples).
+  double worst_structural_max_strain = 0.0;
+  // With a target: the controller's measure-and-decide work, timed here (see kUsage).
+  double controller_ms_per_step = 0.0;
   int particles = 0;
   int sample_every = 1;
   double depth_ms = -1.0;  // --depth: mean time to render one image; < 0: not asked
@@ -310,7 +326,7 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
   result.max_strain = last.max_strain;
   result.max_penetration = last.max_penetration;
   result.max_self_intersections = last.self_intersections;
-  pbd_cloth::bench::writeCsvRow(csv, sim.time(), last);
+  pbd_cloth::bench::writeCsvRow(csv, sim.time(), last, ",0,1");
 
   double step_seconds = 0.0;
   std::clock_t step_cpu = 0;
@@ -322,6 +338,15 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
   long long solo_steps = 0;
   long long columns_steps = 0;
   long long met_steps = 0, substeps_run = 0, redone_steps = 0;
+  // Since the last CSV row: substeps run, and whether every step met the target.
+  long long row_substeps = 0;
+  bool row_met = true;
+  double worst_structural = 0.0;
+  // The controller's own work, timed on a copy of the work it does (Simulation::solveStep): the
+  // structural strain once an attempt, the particles copied once an attempt (the step's start,
+  // then each redo's restore). A scratch copy, sized once, as the core's.
+  pbd_cloth::Particles controller_scratch = sim.particles();
+  double controller_seconds = 0.0;
   long long iterations = 0;
   long long done = 0;
   double asleep_seconds = 0.0, awake_seconds = 0.0;
@@ -348,6 +373,26 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
     if (accuracy.target_met) ++met_steps;
     substeps_run += accuracy.substeps_run;
     if (accuracy.redos > 0) ++redone_steps;
+    row_substeps += accuracy.substeps_run;
+    row_met = row_met && accuracy.target_met;
+    // The step's structural max strain: what the controller measured, or measured here without
+    // a target (outside the timed step call).
+    double step_structural = accuracy.structural_max_strain;
+    if (accuracy.active && accuracy.substeps_run > 0) {  // a slept step measures nothing
+      const Clock::time_point measure_begin = Clock::now();
+      double structural_max = 0.0, structural_mean = 0.0;
+      pbd_cloth::computeStructuralStrain(sim.particles(), sim.topology(), structural_max,
+                                         structural_mean);
+      controller_scratch = sim.particles();
+      controller_seconds += (1 + accuracy.redos) *
+                            std::chrono::duration<double>(Clock::now() - measure_begin).count();
+    } else if (!accuracy.active) {
+      double structural_mean = 0.0;
+      pbd_cloth::computeStructuralStrain(sim.particles(), sim.topology(), step_structural,
+                                         structural_mean);
+    }
+    // A NaN (a blown-up cloth) is the worst there is.
+    if (!(step_structural <= worst_structural)) worst_structural = step_structural;
     ++done;
     // The solver's figures (sim.stats() would also measure the state, as a report does).
     const pbd_cloth::StepStats& stats = sim.solver().stats();
@@ -375,7 +420,10 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
     result.max_penetration = std::max(result.max_penetration, last.max_penetration);
     result.max_self_intersections =
         std::max(result.max_self_intersections, last.self_intersections);
-    pbd_cloth::bench::writeCsvRow(csv, sim.time(), last);
+    pbd_cloth::bench::writeCsvRow(csv, sim.time(), last,
+                                  "," + std::to_string(row_substeps) + (row_met ? ",1" : ",0"));
+    row_substeps = 0;
+    row_met = true;
     last_second.add(done, last);
     // A diverged state stays diverged; stepping NaNs further only costs time.
     if (!last.finite) break;
@@ -421,6 +469,8 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
   result.target_met_fraction = static_cast<double>(met_steps) * per_step;
   result.mean_substeps = static_cast<double>(substeps_run) * per_step;
   result.redone_steps = redone_steps;
+  result.worst_structural_max_strain = worst_structural;
+  result.controller_ms_per_step = 1e3 * controller_seconds * per_step;
   return result;
 }
 
@@ -438,7 +488,8 @@ void printResult(const pbd_cloth::SceneConfig& scene, const BenchResult& r) {
       "truncated_searches=%lld local_searches=%.6g last_second_median_structural_max_strain=%.9g "
       "solo_steps=%lld threads=%d columns_steps=%lld median_structural_max_strain_last_1s=%.9g "
       "median_structural_mean_strain_last_1s=%.9g target_met_fraction=%.6g mean_substeps=%.6g "
-      "redone_steps=%lld",
+      "redone_steps=%lld worst_structural_max_strain=%.9g controller_ms_per_step=%.6g "
+      "controller_fraction=%.6g",
       r.wall_ms_per_step, r.max_strain, last.mean_strain, r.max_penetration,
       last.self_intersections, last.energy, last.finite ? 1 : 0, r.steps, r.sim_time,
       r.iterations_per_step, r.predict_ms, r.collide_ms, r.project_ms, r.update_ms,
@@ -451,7 +502,8 @@ void printResult(const pbd_cloth::SceneConfig& scene, const BenchResult& r) {
       r.last_second_median_structural_max_strain, r.solo_steps, scene.solver.threads,
       r.columns_steps, r.median_structural_max_strain_last_1s,
       r.median_structural_mean_strain_last_1s, r.target_met_fraction, r.mean_substeps,
-      r.redone_steps);
+      r.redone_steps, r.worst_structural_max_strain, r.controller_ms_per_step,
+      r.wall_ms_per_step > 0.0 ? r.controller_ms_per_step / r.wall_ms_per_step : 0.0);
   if (r.depth_ms >= 0.0) std::printf(" depth_ms=%.6g", r.depth_ms);
   std::printf("\n");
 }
@@ -549,7 +601,7 @@ int run(const Options& options) {
   // Written after the run; opened now only so a bad path fails before it.
   std::ofstream state_file = pbd_cloth::bench::openOutput("--save-state", options.save_state);
   state_file.close();
-  pbd_cloth::bench::writeCsvHeader(csv);
+  pbd_cloth::bench::writeCsvHeader(csv, ",substeps_run,target_met");
 
   const BenchResult result = simulate(scene, options, csv, positions, mesh);
   pbd_cloth::bench::finishOutput(csv, options.csv);

@@ -135,15 +135,85 @@ TEST(ClothBench, WritesPositionsAndMeshOfTheFinalState) {
   EXPECT_EQ(faces, 2 * 9 * 9);
 }
 
-// The structural_max_strain column of --csv, one value a sample row (row 0: t = 0).
-std::vector<double> structuralMaxStrains(const std::string& csv_path) {
+const char kCsvHeader[] =
+    "t,max_strain,mean_strain,energy,max_penetration,structural_max_strain,substeps_run,"
+    "target_met";
+
+// Column `column` (0-based) of every row of a --csv file after its header (row 0: t = 0).
+std::vector<double> csvColumn(const std::string& csv_path, int column) {
   std::ifstream in(csv_path);
   std::string line;
   std::getline(in, line);
-  EXPECT_EQ(line, "t,max_strain,mean_strain,energy,max_penetration,structural_max_strain");
+  EXPECT_EQ(line, kCsvHeader);
   std::vector<double> values;
-  while (std::getline(in, line)) values.push_back(std::stod(line.substr(line.rfind(',') + 1)));
+  while (std::getline(in, line)) {
+    std::istringstream fields(line);
+    std::string field;
+    for (int k = 0; k <= column; ++k) std::getline(fields, field, ',');
+    values.push_back(std::stod(field));
+  }
   return values;
+}
+
+// The structural_max_strain column of --csv, one value a sample row (row 0: t = 0).
+std::vector<double> structuralMaxStrains(const std::string& csv_path) {
+  return csvColumn(csv_path, 5);
+}
+
+// --csv's substeps_run and target_met columns and the line's worst_structural_max_strain, with
+// and without a target (issue 51's charts: error and substeps over time). Every step sampled: a
+// row per step, so substeps_run sums to the run's, target_met counts its met steps, and the
+// worst over the rows is the line's worst. Sampled every 4th step, the rows hold the sums of the
+// steps between them and the worst still reads every step.
+TEST(ClothBench, CsvHoldsEachStepsSubstepsAndWhetherItMetTheTarget) {
+  const std::string csv = ::testing::TempDir() + "bench_accuracy.csv";
+  const std::string target =
+      " --set solver.target_max_strain=0.002 --set solver.min_substeps=2"
+      " --set solver.max_substeps=64 --set solver.substeps=2";
+  for (const std::string& setting : {std::string(" --set solver.substeps=3"), target}) {
+    const BenchRun run =
+        runBench("--duration 1 --sample-every 1 --csv " + csv + kSmallUntethered + setting);
+    ASSERT_EQ(run.status, 0) << run.out;
+    const auto values = keyValues(run.out);
+    const std::vector<double> strain = structuralMaxStrains(csv);
+    const std::vector<double> substeps = csvColumn(csv, 6);
+    const std::vector<double> met = csvColumn(csv, 7);
+    ASSERT_EQ(strain.size(), 61u);
+    EXPECT_EQ(substeps[0], 0.0);
+    EXPECT_EQ(met[0], 1.0);
+    double total = 0.0, met_steps = 0.0;
+    for (std::size_t k = 1; k < substeps.size(); ++k) {
+      total += substeps[k];
+      met_steps += met[k];
+    }
+    EXPECT_NEAR(total / 60.0, std::stod(values.at("mean_substeps")), 1e-4) << setting;
+    EXPECT_NEAR(met_steps / 60.0, std::stod(values.at("target_met_fraction")), 1e-4) << setting;
+    const double worst = std::stod(values.at("worst_structural_max_strain"));
+    EXPECT_NEAR(*std::max_element(strain.begin(), strain.end()), worst, 1e-9 + 1e-6 * worst);
+    ASSERT_EQ(values.count("controller_fraction"), 1u);
+    if (setting == target) {
+      EXPECT_GT(std::stod(values.at("controller_ms_per_step")), 0.0);
+      EXPECT_GT(*std::max_element(substeps.begin(), substeps.end()), 2.0) << "never raised";
+      for (std::size_t k = 1; k < met.size(); ++k) {
+        EXPECT_EQ(met[k] == 1.0, strain[k] <= 0.002) << "row " << k;
+      }
+    } else {
+      EXPECT_EQ(values.at("controller_ms_per_step"), "0");
+      EXPECT_EQ(met_steps, 60.0);
+      for (std::size_t k = 1; k < substeps.size(); ++k) EXPECT_EQ(substeps[k], 3.0);
+    }
+    // Every 4th step: the rows sum the steps since the row before; the worst is the same.
+    const BenchRun sparse =
+        runBench("--duration 1 --sample-every 4 --csv " + csv + kSmallUntethered + setting);
+    ASSERT_EQ(sparse.status, 0) << sparse.out;
+    const std::vector<double> sums = csvColumn(csv, 6);
+    EXPECT_EQ(sums.size(), 16u);  // t = 0 and 15 samples
+    double sparse_total = 0.0;
+    for (double value : sums) sparse_total += value;
+    EXPECT_EQ(sparse_total, total) << setting;
+    EXPECT_EQ(keyValues(sparse.out).at("worst_structural_max_strain"),
+              values.at("worst_structural_max_strain"));
+  }
 }
 
 double medianOf(std::vector<double> values) {
