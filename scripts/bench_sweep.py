@@ -318,8 +318,9 @@ GENERAL_SCENES = [
 # substep count is added per run). Extend with a method's keys, e.g.
 #   'xpbd + 2 Newton steps': ['solver.newton_steps=2'],
 # and it runs at every count of GENERAL_SUBSTEPS on every scene, charted as a curve of its own.
+# Fixed substeps: a scene's own target (config/held_corners.yaml recommends one) is turned off.
 GENERAL_PBD_SERIES = {
-    'xpbd': [],
+    'xpbd': ['solver.target_max_strain=0'],
 }
 GENERAL_SUBSTEPS = [40, 80, 120, 180, 240]  # x 1 iteration
 # Bullet on the same scene, the same links (each scene's own link set: one diagonal or both),
@@ -386,7 +387,8 @@ def controller_runs(quick, out_dir):
         target = ['solver.target_max_strain=%g' % CONTROLLER_TARGET,
                   'solver.max_substeps=%d' % CONTROLLER_MAX_SUBSTEPS]
         plan = [('controller', None, extra + target)] + [
-            ('fixed %d' % s, s, extra + ['solver.substeps=%d' % s]) for s in counts]
+            ('fixed %d' % s, s, extra + ['solver.substeps=%d' % s, 'solver.target_max_strain=0'])
+            for s in counts]
         for curve, substeps, sets in plan:
             run = Run('controller', scene, 'cloth_bench', curve, duration, sets,
                       {'method': 'xpbd', 'iterations': 1, 'ordering': 'gauss_seidel',
