@@ -206,6 +206,39 @@ TEST(Allocations, FaultRecoveryAllocatesNothing) {
   EXPECT_EQ(g_allocations.load(), 0);
 }
 
+// Accuracy on demand (solver.target_max_strain): choosing the substeps, and running a step again
+// from its start (the particles and the collisions' step state restored, an obstacle among them),
+// allocate nothing: a cloth swinging down from two pins past a ball, with a target two substeps
+// cannot meet.
+TEST(Allocations, AccuracyTargetAndRedoneStepsAllocateNothing) {
+  SceneConfig scene = test::clothScene(20, 20, 0.03, Method::kXpbd);
+  scene.cloth.pinned = {0, 19};
+  scene.solver.substeps = 2;
+  scene.solver.target_max_strain = 0.002;
+  scene.solver.max_substeps = 1000;
+  ObstacleConfig ball;
+  ball.name = "ball";
+  ball.shape = ShapeType::kSphere;
+  ball.radius = 0.1;
+  ball.pose.position = Vec3(0.3, -0.3, -0.3);
+  scene.obstacles = {ball};
+  Simulation sim(scene);
+  for (int k = 0; k < 3; ++k) sim.step();
+  SolverConfig tighter = scene.solver;  // the substeps chosen so far are no longer enough
+  tighter.target_max_strain = 0.0002;
+  sim.setSolverConfig(tighter);
+  g_allocations = 0;
+  g_counting = true;
+  int redone = 0;
+  for (int k = 0; k < 20; ++k) {
+    sim.step();
+    redone += sim.accuracy().redos;
+  }
+  g_counting = false;
+  EXPECT_GT(redone, 0);  // the path that restores a step ran
+  EXPECT_EQ(g_allocations.load(), 0);
+}
+
 // Forward kinematics runs every step: with `out` at its size it allocates nothing (a revolute,
 // prismatic, fixed and mimic joint on the way).
 TEST(Allocations, RobotLinkPosesAllocateNothing) {
