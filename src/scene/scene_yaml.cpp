@@ -371,12 +371,15 @@ Waypoint readWaypoint(const YAML::Node& node, const std::string& key) {
 }
 
 GripperConfig readGripper(const YAML::Node& node, const std::string& key) {
-  const MapReader map(node, key, {"name", "radius", "tf_frame", "trajectory"});
-  if (!node || node.IsNull()) wrongType(node, key, "a map {name, radius, tf_frame, trajectory}");
+  const MapReader map(node, key, {"name", "radius", "tf_frame", "trajectory", "repeat"});
+  if (!node || node.IsNull()) {
+    wrongType(node, key, "a map {name, radius, tf_frame, trajectory, repeat}");
+  }
   GripperConfig g;
   map.read("name", g.name);
   map.read("radius", g.radius);
   map.read("tf_frame", g.tf_frame);
+  map.read("repeat", g.repeat);
   const YAML::Node trajectory = listOf(map, "trajectory", "a list of waypoints {t, pose, grasp}");
   for (std::size_t k = 0; k < trajectory.size(); ++k) {
     g.trajectory.push_back(readWaypoint(trajectory[k], indexed(map.keyOf("trajectory"), k)));

@@ -40,6 +40,10 @@ const char kUsage[] =
     "attempt of a step run again counted) redone_steps (steps a target ran again)\n"
     "worst_structural_max_strain (the largest structural max strain over every step of the run,\n"
     "whatever --sample-every says: <= a target means the target was met at every step)\n"
+    "budget_exhausted_steps (steps that missed the target at solver.max_substeps: the budget\n"
+    "did not allow it) worst_target_ratio_within_budget (the largest error over its target,\n"
+    "max(strain / target_max_strain, penetration / target_penetration), over the other steps;\n"
+    "0 without a target)\n"
     "controller_ms_per_step and controller_fraction (with a target: the controller's own work,\n"
     "timed here on the state of each step as the core does it: the structural strain measured\n"
     "once an attempt and the particles copied once an attempt, for the step's start and its\n"
@@ -230,6 +234,10 @@ struct BenchResult {
   long long redone_steps = 0;
   // The largest structural max strain over every step (not only the metric samples).
   double worst_structural_max_strain = 0.0;
+  // With a target: the steps that missed it at solver.max_substeps, and the largest error over
+  // the target of every other step (issue target "no step over it by more than 50 %").
+  long long budget_exhausted_steps = 0;
+  double worst_target_ratio_within_budget = 0.0;
   // With a target: the controller's measure-and-decide work, timed here (see kUsage).
   double controller_ms_per_step = 0.0;
   int particles = 0;
@@ -342,6 +350,8 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
   long long row_substeps = 0;
   bool row_met = true;
   double worst_structural = 0.0;
+  long long budget_exhausted_steps = 0;
+  double worst_ratio_within_budget = 0.0;
   // The controller's own work, timed on a copy of the work it does (Simulation::solveStep): the
   // structural strain once an attempt, the particles copied once an attempt (the step's start,
   // then each redo's restore). A scratch copy, sized once, as the core's.
@@ -373,6 +383,13 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
     if (accuracy.target_met) ++met_steps;
     substeps_run += accuracy.substeps_run;
     if (accuracy.redos > 0) ++redone_steps;
+    if (accuracy.budget_exhausted) {
+      ++budget_exhausted_steps;
+    } else if (accuracy.active && accuracy.substeps_run > 0) {
+      const double ratio =
+          sim.accuracyController().ratio(accuracy.structural_max_strain, accuracy.max_penetration);
+      if (!(ratio <= worst_ratio_within_budget)) worst_ratio_within_budget = ratio;
+    }
     row_substeps += accuracy.substeps_run;
     row_met = row_met && accuracy.target_met;
     // The step's structural max strain: what the controller measured, or measured here without
@@ -470,6 +487,8 @@ BenchResult simulate(const pbd_cloth::SceneConfig& scene, const Options& options
   result.mean_substeps = static_cast<double>(substeps_run) * per_step;
   result.redone_steps = redone_steps;
   result.worst_structural_max_strain = worst_structural;
+  result.budget_exhausted_steps = budget_exhausted_steps;
+  result.worst_target_ratio_within_budget = worst_ratio_within_budget;
   result.controller_ms_per_step = 1e3 * controller_seconds * per_step;
   return result;
 }
@@ -489,7 +508,8 @@ void printResult(const pbd_cloth::SceneConfig& scene, const BenchResult& r) {
       "solo_steps=%lld threads=%d columns_steps=%lld median_structural_max_strain_last_1s=%.9g "
       "median_structural_mean_strain_last_1s=%.9g target_met_fraction=%.6g mean_substeps=%.6g "
       "redone_steps=%lld worst_structural_max_strain=%.9g controller_ms_per_step=%.6g "
-      "controller_fraction=%.6g",
+      "controller_fraction=%.6g budget_exhausted_steps=%lld "
+      "worst_target_ratio_within_budget=%.6g",
       r.wall_ms_per_step, r.max_strain, last.mean_strain, r.max_penetration,
       last.self_intersections, last.energy, last.finite ? 1 : 0, r.steps, r.sim_time,
       r.iterations_per_step, r.predict_ms, r.collide_ms, r.project_ms, r.update_ms,
@@ -503,7 +523,8 @@ void printResult(const pbd_cloth::SceneConfig& scene, const BenchResult& r) {
       r.columns_steps, r.median_structural_max_strain_last_1s,
       r.median_structural_mean_strain_last_1s, r.target_met_fraction, r.mean_substeps,
       r.redone_steps, r.worst_structural_max_strain, r.controller_ms_per_step,
-      r.wall_ms_per_step > 0.0 ? r.controller_ms_per_step / r.wall_ms_per_step : 0.0);
+      r.wall_ms_per_step > 0.0 ? r.controller_ms_per_step / r.wall_ms_per_step : 0.0,
+      r.budget_exhausted_steps, r.worst_target_ratio_within_budget);
   if (r.depth_ms >= 0.0) std::printf(" depth_ms=%.6g", r.depth_ms);
   std::printf("\n");
 }

@@ -431,6 +431,9 @@ INSTANTIATE_TEST_SUITE_P(
         BadValue{"grippers.0.trajectory.1={t: 2}", "grippers[0].trajectory[1].pose", "required"},
         BadValue{"grippers.0.trajectory.1.grasp=1.5", "grippers[0].trajectory[1].grasp",
                  "true or false"},
+        // INTERFACE.md's gripper goes up and does not come back: it cannot repeat.
+        BadValue{"grippers.0.repeat=true", "grippers[0].repeat", "must be the first's"},
+        BadValue{"grippers.0.repeat=2", "grippers[0].repeat", "true or false"},
         BadValue{"obstacles.0.radius=0", "obstacles[0].radius", "> 0"},
         BadValue{"obstacles.0.shape=cone", "obstacles[0].shape",
                  "sphere, box, capsule, cylinder, plane, mesh"},

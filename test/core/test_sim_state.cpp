@@ -114,6 +114,50 @@ TEST(SimState, DemoFoldWithScriptedGraspContinuesBitForBit) {
   EXPECT_EQ(saved.grippers[0].next_waypoint, 3u);
 }
 
+// A repeating script (grippers[i].repeat, period 0.6 s): the corner is grasped at 0.1 s, lifted,
+// released at 0.5 s, and grasped again at 0.7 s in the second period; the gripper is where it was
+// a period before; the save falls in the second period (next_waypoint counts past the waypoints
+// of the first) and the run continues bit for bit.
+TEST(SimState, RepeatingTrajectoryGraspsEveryPeriodAndContinuesBitForBit) {
+  SceneConfig scene = shippedScene("demo.yaml");
+  const Vec3 corner(-0.2375, 0.2375, 0.406);
+  auto at = [](const Vec3& p) {
+    Pose pose;
+    pose.position = p;
+    return pose;
+  };
+  scene.grippers[0].repeat = true;
+  scene.grippers[0].trajectory = {{0.0, at(corner), -1},
+                                  {0.1, at(corner), 1},
+                                  {0.4, at(corner + Vec3(0.0, 0.0, 0.1)), -1},
+                                  {0.5, at(corner + Vec3(0.0, 0.0, 0.1)), 0},
+                                  {0.6, at(corner), -1}};
+  validate(scene);
+
+  Simulation sim(scene);
+  std::vector<bool> grasping;  // after each step
+  std::vector<Vec3> gripper_at;
+  for (int k = 0; k < 72; ++k) {
+    sim.step();
+    grasping.push_back(sim.grippers().grasping(0));
+    gripper_at.push_back(sim.grippers().pose(0).position);
+  }
+  // Step k ends at (k + 1) / 60 s; events fire at the start of the step they fall in.
+  EXPECT_FALSE(grasping[4]) << "0.083 s: not yet";
+  EXPECT_TRUE(grasping[10]) << "0.183 s: grasped";
+  EXPECT_FALSE(grasping[33]) << "0.567 s: released";
+  EXPECT_TRUE(grasping[45]) << "0.767 s: grasped again in the second period";
+  for (int k = 0; k + 36 < 72; ++k) {
+    EXPECT_LT((gripper_at[k + 36] - gripper_at[k]).norm(), 1e-9) << "step " << k;
+  }
+  EXPECT_GT((gripper_at[20] - corner).norm(), 0.05) << "0.35 s: lifted";
+
+  const SimulationState saved = expectContinuesBitForBit(scene, 48, 96);
+  EXPECT_EQ(saved.grippers[0].next_waypoint, 7u)
+      << "5 waypoints of the first period, 2 of the second";
+  EXPECT_FALSE(saved.grippers[0].grasped.empty()) << "the second grasp spans the save";
+}
+
 // The same fold with Verlet (its velocity is the half-step velocity x_n - x_{n-1}).
 TEST(SimState, VerletContinuesBitForBit) {
   SceneConfig scene = shippedScene("demo.yaml", {"solver.method=verlet"});

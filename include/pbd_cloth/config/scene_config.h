@@ -89,6 +89,10 @@ struct GripperConfig {
   double radius = 0.02;              // grippers[i].radius (m)
   std::string tf_frame;              // grippers[i].tf_frame
   std::vector<Waypoint> trajectory;  // grippers[i].trajectory
+  // grippers[i].repeat: after its last waypoint the trajectory starts again from its first, with
+  // the last waypoint's t as its period (grasp events included), so a scripted motion can run for
+  // as long as the node does.
+  bool repeat = false;
 };
 
 struct JointWaypoint {

@@ -15,6 +15,10 @@
 //   and when r > kRedo (far over) the step is run again from its start with those substeps, at
 //   most kMaxRedos times: a state published that far over the target would break the user's
 //   error bound, and carrying the stretch into the next steps costs them more than one redo.
+//   Six redos, not two: where the error falls slower than 1 / n^2 (the first step of a cloth let
+//   go, the step of a grasp) two left it at 1.9x the target (doc/journal.md "2026-12-07: Accuracy
+//   on demand"); each redo multiplies the substeps by sqrt(r / kAim) > 1.15, and max_substeps
+//   bounds every attempt, so a step costs at most 7 max_substeps.
 // - r < kMargin (well under) for kCalmSteps steps in a row: the next step takes fewer,
 //   n sqrt(r / kAim), by at most an eighth a step, so a calm moment does not drop the effort the
 //   next jerk needs at once (lowering at once made a swinging cloth cycle: lower, overshoot, run
@@ -33,7 +37,7 @@ class AccuracyController {
   static constexpr double kAim = 0.75;    // the ratio the substeps are chosen for
   static constexpr double kMargin = 0.5;  // below it, fewer substeps
   static constexpr double kRedo = 1.0;    // above it, the step runs again
-  static constexpr int kMaxRedos = 2;
+  static constexpr int kMaxRedos = 6;
   static constexpr int kCalmSteps = 10;  // steps well under the target before fewer substeps
 
   // Takes the targets and range; the substeps start at solver.substeps (clamped to the range) on

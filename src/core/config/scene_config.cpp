@@ -267,6 +267,24 @@ void validateGripper(const std::string& key, const GripperConfig& g, std::set<st
     checkPose(wkey + ".pose", w.pose);
     checkInteger(wkey + ".grasp", w.grasp, -1, 1);
   }
+  if (g.repeat) {
+    // The period is the last waypoint's t: the script must start at 0 and end where it starts,
+    // or the gripper (and what it holds) would jump at each repeat.
+    if (g.trajectory.size() < 2 || g.trajectory.front().t != 0.0 ||
+        !(g.trajectory.back().t > 0.0)) {
+      throw ConfigError(key + ".repeat",
+                        "needs a trajectory of at least 2 waypoints from t = 0 to a "
+                        "last t > 0 (the period)");
+    }
+    const Pose &first = g.trajectory.front().pose, &last = g.trajectory.back().pose;
+    if ((first.position - last.position).norm() > 1e-9 ||
+        first.orientation.angularDistance(last.orientation) > 1e-9) {
+      throw ConfigError(key + ".repeat", "the last waypoint's pose (trajectory[" +
+                                             std::to_string(g.trajectory.size() - 1) +
+                                             "]) must be the first's: the trajectory starts "
+                                             "again from it");
+    }
+  }
 }
 
 // The geometry of one shape: an obstacle (key "obstacles[i]") or a robot link's collision element

@@ -1,6 +1,7 @@
 #include "pbd_cloth/sim/simulation.h"
 
 #include <algorithm>
+#include <cmath>
 #include <sstream>
 
 #include "pbd_cloth/sim/cloth_builder.h"
@@ -211,18 +212,27 @@ void Simulation::setFriction(const FrictionConfig& friction) {
 
 // Scripted grippers: grasp events due by the start of this step fire, and the target is the
 // trajectory's pose at the end of the step. A live pose (setGripperPose) replaces the script.
+// A repeating trajectory (grippers[i].repeat) runs again every period (its last waypoint's t):
+// next_waypoint then counts the waypoints passed over every period, period k's waypoint i being
+// at k period + t_i.
 void Simulation::followTrajectories(double t_end) {
   for (int g = 0; g < grippers_.count(); ++g) {
     GripperState& state = grippers_[g];
-    const auto& trajectory = scene_.grippers[g].trajectory;
+    const GripperConfig& config = scene_.grippers[g];
+    const auto& trajectory = config.trajectory;
     if (state.live || trajectory.empty()) continue;
-    while (state.next_waypoint < trajectory.size() &&
-           trajectory[state.next_waypoint].t <= time_ + 1e-9) {
-      const int grasp = trajectory[state.next_waypoint].grasp;
+    const std::size_t count = trajectory.size();
+    const double period = config.repeat ? trajectory.back().t : 0.0;
+    while (config.repeat || state.next_waypoint < count) {
+      const std::size_t index = state.next_waypoint % count;
+      const double repeats = static_cast<double>(state.next_waypoint / count);
+      if (repeats * period + trajectory[index].t > time_ + 1e-9) break;
+      const int grasp = trajectory[index].grasp;
       if (grasp >= 0) changeGrasp(g, grasp == 1);
       ++state.next_waypoint;
     }
-    state.target = trajectoryPose(trajectory, t_end);
+    state.target = trajectoryPose(
+        trajectory, config.repeat ? t_end - std::floor(t_end / period) * period : t_end);
   }
 }
 

@@ -120,7 +120,8 @@ std::string Simulation::checkState(const SimulationState& state) const {
     if (error.empty()) error = checkPose(field + ".pose", gripper.pose);
     if (error.empty()) error = checkPose(field + ".target", gripper.target);
     if (error.empty() && !gripper.velocity.allFinite()) error = field + ".velocity: not finite";
-    if (error.empty() && gripper.next_waypoint > scene_.grippers[g].trajectory.size()) {
+    if (error.empty() && !scene_.grippers[g].repeat &&
+        gripper.next_waypoint > scene_.grippers[g].trajectory.size()) {
       error = field + ".next_waypoint: " + std::to_string(gripper.next_waypoint) +
               ", the trajectory has " + std::to_string(scene_.grippers[g].trajectory.size()) +
               " waypoints";
