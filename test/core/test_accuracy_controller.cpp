@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <string>
 #include <vector>
@@ -105,6 +106,38 @@ TEST(AccuracyController, RaisesOverTheTargetAndLowersSlowlyUnderIt) {
   off.configure(SolverConfig());
   EXPECT_FALSE(off.active());
   EXPECT_FALSE(off.redo(1e9, 0));
+}
+
+// From the second redo on the substeps follow the rate the step's own error fell at between its
+// last two attempts (r ~ n^-p), not the square-root rule: where the error falls slowly, the rule
+// would creep up by 15 % an attempt and run out of attempts over the target.
+TEST(AccuracyController, RedoesFollowTheErrorsOwnRate) {
+  SolverConfig solver;
+  solver.substeps = 10;
+  AccuracyController controller;
+  controller.configure(withTarget(solver, 0.01, 1, 1000));
+  // First redo: 4x the target at 10 substeps -> ceil(10 sqrt(4 / 0.75)) = 24.
+  EXPECT_TRUE(controller.redo(4.0, 0));
+  EXPECT_EQ(controller.substeps(), 24);
+  // 2x at 24: p = ln(4 / 2) / ln(24 / 10) = 0.792 -> ceil(24 (2 / 0.75)^(1 / p)) = 83 (the
+  // square-root rule would give 40).
+  EXPECT_TRUE(controller.redo(2.0, 1));
+  const double p = std::log(2.0) / std::log(2.4);
+  EXPECT_EQ(controller.substeps(), static_cast<int>(std::ceil(24 * std::pow(2.0 / 0.75, 1 / p))));
+  EXPECT_EQ(controller.substeps(), 83);
+  // The error did not fall at all: as many as one attempt may add, 4 x.
+  EXPECT_TRUE(controller.redo(2.0, 2));
+  EXPECT_EQ(controller.substeps(), 332);
+  // The budget bounds every attempt: from 332 substeps, 2x -> 543 (square-root rule); 1.5x
+  // there reads p = ln(2 / 1.5) / ln(543 / 332) = 0.58, which asks for 1,776: max_substeps 1000.
+  AccuracyController budget;
+  solver.substeps = 332;
+  budget.configure(withTarget(solver, 0.01, 1, 1000));
+  EXPECT_TRUE(budget.redo(2.0, 0));
+  EXPECT_EQ(budget.substeps(), 543);
+  EXPECT_TRUE(budget.redo(1.5, 1));
+  EXPECT_EQ(budget.substeps(), 1000);
+  EXPECT_FALSE(budget.redo(1.2, 2)) << "at the budget: no more attempts";
 }
 
 // Target 1 % structural strain with room for 400 substeps: the state after every step meets it

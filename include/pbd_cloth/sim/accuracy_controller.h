@@ -15,10 +15,13 @@
 //   and when r > kRedo (far over) the step is run again from its start with those substeps, at
 //   most kMaxRedos times: a state published that far over the target would break the user's
 //   error bound, and carrying the stretch into the next steps costs them more than one redo.
-//   Six redos, not two: where the error falls slower than 1 / n^2 (the first step of a cloth let
-//   go, the step of a grasp) two left it at 1.9x the target (doc/journal.md "2026-12-07: Accuracy
-//   on demand"); each redo multiplies the substeps by sqrt(r / kAim) > 1.15, and max_substeps
-//   bounds every attempt, so a step costs at most 7 max_substeps.
+//   Where the error falls slower than 1 / n^2 (the first step of a cloth let go: 3.6 % at 4
+//   substeps, 1.5 % at 30, 1.1 % at 100, 0.17 % at 300) the square-root rule creeps: two redos
+//   left such steps at 1.9x the target (doc/journal.md "2026-12-07: Accuracy on demand"). So from
+//   the second redo on, the rate is the step's own, measured between its last two attempts,
+//   r ~ n^-p with p = log(r_1 / r_2) / log(n_2 / n_1) (clamped to [0.25, 2]; 4 n when the error
+//   did not fall), and the substeps are n_2 (r_2 / kAim)^(1/p). Every attempt is bounded by
+//   max_substeps, so a step costs at most (kMaxRedos + 1) max_substeps.
 // - r < kMargin (well under) for kCalmSteps steps in a row: the next step takes fewer,
 //   n sqrt(r / kAim), by at most an eighth a step, so a calm moment does not drop the effort the
 //   next jerk needs at once (lowering at once made a swinging cloth cycle: lower, overshoot, run
@@ -65,6 +68,7 @@ class AccuracyController {
 
  private:
   int raised(double ratio) const;
+  int raisedAtRate(double ratio) const;
 
   bool active_ = false;
   double target_strain_ = 0.0;
@@ -73,6 +77,9 @@ class AccuracyController {
   int max_substeps_ = 1;
   int substeps_ = 1;
   int calm_steps_ = 0;  // steps in a row with r < kMargin
+  // The attempt before the last of the step being run again (redo()): its substeps and ratio.
+  int previous_substeps_ = 0;
+  double previous_ratio_ = 0.0;
 };
 
 }  // namespace pbd_cloth

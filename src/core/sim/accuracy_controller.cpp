@@ -40,11 +40,26 @@ int AccuracyController::raised(double ratio) const {
   return std::min(limit, std::max(substeps_ + 1, static_cast<int>(wanted)));
 }
 
+// From the second redo on: the rate the error fell at between the last two attempts,
+// r ~ n^-p, gives n (r / kAim)^(1/p) (accuracy_controller.h).
+int AccuracyController::raisedAtRate(double ratio) const {
+  const int limit = std::min(max_substeps_, 4 * substeps_);
+  if (!(previous_ratio_ > ratio) || previous_substeps_ >= substeps_) return limit;
+  const double rate = std::clamp(std::log(previous_ratio_ / ratio) /
+                                     std::log(static_cast<double>(substeps_) / previous_substeps_),
+                                 0.25, 2.0);
+  const double wanted = std::ceil(substeps_ * std::pow(std::min(ratio, 1e6) / kAim, 1.0 / rate));
+  return static_cast<int>(std::min<double>(limit, std::max<double>(substeps_ + 1, wanted)));
+}
+
 bool AccuracyController::redo(double ratio, int attempt) {
   if (!active_ || ratio <= kRedo || attempt >= kMaxRedos || substeps_ >= max_substeps_) {
     return false;
   }
-  substeps_ = raised(ratio);
+  const int next = attempt == 0 ? raised(ratio) : raisedAtRate(ratio);
+  previous_substeps_ = substeps_;
+  previous_ratio_ = ratio;
+  substeps_ = next;
   calm_steps_ = 0;
   return true;
 }
