@@ -13,6 +13,7 @@
 #include <utility>
 #include <vector>
 
+#include "collision_scenes.h"
 #include "mesh_builders.h"
 #include "obj_text.h"
 #include "pbd_cloth/scene/scene_assets.h"
@@ -216,12 +217,7 @@ TEST(Allocations, AccuracyTargetAndRedoneStepsAllocateNothing) {
   scene.solver.substeps = 2;
   scene.solver.target_max_strain = 0.002;
   scene.solver.max_substeps = 1000;
-  ObstacleConfig ball;
-  ball.name = "ball";
-  ball.shape = ShapeType::kSphere;
-  ball.radius = 0.1;
-  ball.pose.position = Vec3(0.3, -0.3, -0.3);
-  scene.obstacles = {ball};
+  scene.obstacles = {test::sphere("ball", 0.1, test::makePose(Vec3(0.3, -0.3, -0.3)))};
   Simulation sim(scene);
   for (int k = 0; k < 3; ++k) sim.step();
   SolverConfig tighter = scene.solver;  // the substeps chosen so far are no longer enough

@@ -14,6 +14,7 @@
 #include <sstream>
 #include <string>
 
+#include "collision_scenes.h"
 #include "pbd_cloth/scene/scene_yaml.h"
 #include "pbd_cloth/sim/simulation.h"
 #include "pbd_cloth/state/saved_state.h"
@@ -22,6 +23,8 @@ namespace pbd_cloth {
 namespace {
 
 const std::string kConfig = std::string(PBD_CLOTH_SOURCE_DIR) + "/config/";
+// The corner of config/demo.yaml's towel (its particle 0), where the scripted grasps take it.
+const Vec3 kDemoCorner(-0.2375, 0.2375, 0.406);
 
 SceneConfig shippedScene(const std::string& file, const std::vector<std::string>& overrides = {}) {
   YAML::Node root = loadSceneYaml(kConfig + file);
@@ -97,17 +100,12 @@ SimulationState expectContinuesBitForBit(const SceneConfig& scene, int split, in
 // the save at 1 s, the release (with the gripper's velocity) comes after it.
 TEST(SimState, DemoFoldWithScriptedGraspContinuesBitForBit) {
   SceneConfig scene = shippedScene("demo.yaml");
-  const Vec3 corner(-0.2375, 0.2375, 0.406);
-  auto at = [](const Vec3& p) {
-    Pose pose;
-    pose.position = p;
-    return pose;
-  };
-  scene.grippers[0].trajectory = {{0.0, at(corner), -1},
-                                  {0.1, at(corner), 1},
-                                  {0.8, at(Vec3(0.0, 0.0, 0.6)), -1},
-                                  {1.5, at(Vec3(0.2, -0.2, 0.45)), -1},
-                                  {1.7, at(Vec3(0.2, -0.2, 0.45)), 0}};
+  using test::makePose;
+  scene.grippers[0].trajectory = {{0.0, makePose(kDemoCorner), -1},
+                                  {0.1, makePose(kDemoCorner), 1},
+                                  {0.8, makePose(Vec3(0.0, 0.0, 0.6)), -1},
+                                  {1.5, makePose(Vec3(0.2, -0.2, 0.45)), -1},
+                                  {1.7, makePose(Vec3(0.2, -0.2, 0.45)), 0}};
   const SimulationState saved = expectContinuesBitForBit(scene, 60, 120);
   ASSERT_EQ(saved.grippers.size(), 1u);
   EXPECT_FALSE(saved.grippers[0].grasped.empty()) << "the grasp spans the save";
@@ -120,18 +118,13 @@ TEST(SimState, DemoFoldWithScriptedGraspContinuesBitForBit) {
 // of the first) and the run continues bit for bit.
 TEST(SimState, RepeatingTrajectoryGraspsEveryPeriodAndContinuesBitForBit) {
   SceneConfig scene = shippedScene("demo.yaml");
-  const Vec3 corner(-0.2375, 0.2375, 0.406);
-  auto at = [](const Vec3& p) {
-    Pose pose;
-    pose.position = p;
-    return pose;
-  };
+  using test::makePose;
   scene.grippers[0].repeat = true;
-  scene.grippers[0].trajectory = {{0.0, at(corner), -1},
-                                  {0.1, at(corner), 1},
-                                  {0.4, at(corner + Vec3(0.0, 0.0, 0.1)), -1},
-                                  {0.5, at(corner + Vec3(0.0, 0.0, 0.1)), 0},
-                                  {0.6, at(corner), -1}};
+  scene.grippers[0].trajectory = {{0.0, makePose(kDemoCorner), -1},
+                                  {0.1, makePose(kDemoCorner), 1},
+                                  {0.4, makePose(kDemoCorner + Vec3(0.0, 0.0, 0.1)), -1},
+                                  {0.5, makePose(kDemoCorner + Vec3(0.0, 0.0, 0.1)), 0},
+                                  {0.6, makePose(kDemoCorner), -1}};
   validate(scene);
 
   Simulation sim(scene);
@@ -150,7 +143,7 @@ TEST(SimState, RepeatingTrajectoryGraspsEveryPeriodAndContinuesBitForBit) {
   for (int k = 0; k + 36 < 72; ++k) {
     EXPECT_LT((gripper_at[k + 36] - gripper_at[k]).norm(), 1e-9) << "step " << k;
   }
-  EXPECT_GT((gripper_at[20] - corner).norm(), 0.05) << "0.35 s: lifted";
+  EXPECT_GT((gripper_at[20] - kDemoCorner).norm(), 0.05) << "0.35 s: lifted";
 
   const SimulationState saved = expectContinuesBitForBit(scene, 48, 96);
   EXPECT_EQ(saved.grippers[0].next_waypoint, 7u)
@@ -161,8 +154,7 @@ TEST(SimState, RepeatingTrajectoryGraspsEveryPeriodAndContinuesBitForBit) {
 // The same fold with Verlet (its velocity is the half-step velocity x_n - x_{n-1}).
 TEST(SimState, VerletContinuesBitForBit) {
   SceneConfig scene = shippedScene("demo.yaml", {"solver.method=verlet"});
-  Pose corner;
-  corner.position = Vec3(-0.2375, 0.2375, 0.406);
+  Pose corner = test::makePose(kDemoCorner);
   Pose up = corner;
   up.position.z() += 0.3;
   scene.grippers[0].trajectory = {{0.0, corner, 1}, {1.5, up, -1}};
@@ -267,8 +259,7 @@ class SimStateRefusal : public ::testing::Test {
  protected:
   void SetUp() override {
     SceneConfig scene = shippedScene("demo.yaml");
-    Pose corner;
-    corner.position = Vec3(-0.2375, 0.2375, 0.406);
+    const Pose corner = test::makePose(kDemoCorner);
     scene.grippers[0].trajectory = {{0.0, corner, 1}};
     sim_ = std::make_unique<Simulation>(scene);
     run(*sim_, 0, 10, Drive());
