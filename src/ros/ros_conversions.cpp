@@ -207,7 +207,24 @@ void RosConversions::toParticleMarkers(const Simulation& sim, const std_msgs::He
   }
   markers.markers.push_back(cloth);
 
-  const int granular_count = particles.size() - particles.cloth_count;
+  // Each rope as a LINE_STRIP of its diameter through its particles (namespace "ropes", id its
+  // index in scene.ropes).
+  int after_ropes = particles.cloth_count;
+  for (std::size_t r = 0; r < sim.ropes().size(); ++r) {
+    const Rod& rope = sim.ropes()[r];
+    visualization_msgs::Marker line;
+    initMarker(header, "ropes", static_cast<int>(r), visualization_msgs::Marker::LINE_STRIP, line);
+    line.scale.x = 2.0 * rope.radius;
+    line.color = color(0.85f, 0.45f, 0.15f);
+    line.points.resize(rope.size());
+    for (int k = 0; k < rope.size(); ++k) {
+      line.points[k] = toPoint(particles.position[rope.first_particle + k]);
+    }
+    markers.markers.push_back(line);
+    after_ropes = rope.first_particle + rope.size();
+  }
+
+  const int granular_count = particles.size() - after_ropes;
   if (granular_count <= 0) {
     return;
   }
@@ -216,7 +233,7 @@ void RosConversions::toParticleMarkers(const Simulation& sim, const std_msgs::He
   granular.scale.x = granular.scale.y = granular.scale.z = 2.0 * scene.granular.radius;
   granular.color = color(0.8f, 0.7f, 0.4f);
   granular.points.reserve(granular_count);
-  for (int i = particles.cloth_count; i < particles.size(); ++i) {
+  for (int i = after_ropes; i < particles.size(); ++i) {
     granular.points.push_back(toPoint(particles.position[i]));
   }
   markers.markers.push_back(granular);

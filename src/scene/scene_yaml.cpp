@@ -350,6 +350,35 @@ void readCloth(const YAML::Node& node, ClothConfig& c) {
   }
 }
 
+RopeConfig readRope(const YAML::Node& node, const std::string& key) {
+  const MapReader map(node, key,
+                      {"name", "points", "start", "end", "segments", "radius", "density",
+                       "young_modulus", "shear_modulus", "stretch_compliance", "pinned"});
+  RopeConfig r;
+  map.read("name", r.name);
+  if (map.has("points")) {
+    const YAML::Node points = listOf(map, "points", "a list of [x, y, z] points");
+    for (std::size_t k = 0; k < points.size(); ++k) {
+      r.points.push_back(toVector3(points[k], indexed(map.keyOf("points"), k)));
+    }
+  }
+  map.read("start", r.start);
+  map.read("end", r.end);
+  map.read("segments", r.segments);
+  map.read("radius", r.radius);
+  map.read("density", r.density);
+  map.read("young_modulus", r.young_modulus);
+  map.read("shear_modulus", r.shear_modulus);
+  map.read("stretch_compliance", r.stretch_compliance);
+  if (map.has("pinned")) {
+    const YAML::Node pinned = listOf(map, "pinned", "a list of the rope's particle indices");
+    for (std::size_t k = 0; k < pinned.size(); ++k) {
+      r.pinned.push_back(toInt(pinned[k], indexed(map.keyOf("pinned"), k)));
+    }
+  }
+  return r;
+}
+
 void readGranular(const YAML::Node& node, GranularConfig& g) {
   const MapReader map(node, "granular", {"count", "radius", "mass", "region"});
   map.read("count", g.count);
@@ -534,7 +563,7 @@ const Names kIgnoredTopLevelKeys = {"description"};
 SceneConfig readScene(const YAML::Node& root) {
   const MapReader map(root, "",
                       {"frame_id", "step_rate", "publish_rate", "solver", "cloth", "granular",
-                       "grippers", "bounds", "obstacles", "robot", "cameras"},
+                       "ropes", "grippers", "bounds", "obstacles", "robot", "cameras"},
                       kIgnoredTopLevelKeys);
   SceneConfig scene;
   map.read("frame_id", scene.frame_id);
@@ -544,6 +573,10 @@ SceneConfig readScene(const YAML::Node& root) {
   readCloth(map.get("cloth"), scene.cloth);
   readGranular(map.get("granular"), scene.granular);
 
+  const YAML::Node ropes = listOf(map, "ropes", "a list of ropes");
+  for (std::size_t k = 0; k < ropes.size(); ++k) {
+    scene.ropes.push_back(readRope(ropes[k], indexed("ropes", k)));
+  }
   const YAML::Node grippers = listOf(map, "grippers", "a list of grippers");
   for (std::size_t k = 0; k < grippers.size(); ++k) {
     scene.grippers.push_back(readGripper(grippers[k], indexed("grippers", k)));

@@ -98,6 +98,7 @@ TEST(SceneYaml, HangingYamlListsEveryKeyTheReaderAccepts) {
       {"cloth.friction", "{cloth: {friction: {zz_unknown: 1}}}"},
       {"granular", "{granular: {zz_unknown: 1}}"},
       {"granular.region", "{granular: {region: {zz_unknown: 1}}}"},
+      {"ropes[]", "{ropes: [{zz_unknown: 1}]}"},
       {"grippers[]", "{grippers: [{zz_unknown: 1}]}"},
       {"grippers[].trajectory[]", "{grippers: [{name: g, trajectory: [{zz_unknown: 1}]}]}"},
       {"bounds", "{bounds: {zz_unknown: 1}}"},

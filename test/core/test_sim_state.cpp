@@ -371,21 +371,29 @@ TEST(SimStateFile, BadFilesAreRefusedWithTheReason) {
   EXPECT_NE(reason.find("version " + std::to_string(kStateFileVersion + 1)), std::string::npos)
       << reason;
 
-  // Version 1 had no search window (4 bytes) and version 2 no chosen substeps and calm steps (8
-  // bytes, the last): both still read, with none chosen.
-  std::string first = bytes.substr(0, bytes.size() - 12);
+  // Version 1 had no search window (4 bytes), version 2 no chosen substeps and calm steps (8
+  // bytes) and version 3 no ropes' segments (two counts of 8 bytes here, the last): all still
+  // read, with none chosen and no ropes.
+  const std::size_t ropes = 16;
+  std::string first = bytes.substr(0, bytes.size() - 12 - ropes);
   first[8] = 1;
   std::istringstream old_file(first);
   ASSERT_TRUE(readState(old_file, read, reason)) << reason;
   EXPECT_EQ(read.search_window, 0);
   EXPECT_EQ(read.chosen_substeps, 0);
   EXPECT_TRUE(sameBits(read.position, state.position));
-  std::string second = bytes.substr(0, bytes.size() - 8);
+  std::string second = bytes.substr(0, bytes.size() - 8 - ropes);
   second[8] = 2;
   std::istringstream second_file(second);
   ASSERT_TRUE(readState(second_file, read, reason)) << reason;
   EXPECT_EQ(read.search_window, state.search_window);
   EXPECT_EQ(read.chosen_substeps, 0);
+  std::string third = bytes.substr(0, bytes.size() - ropes);
+  third[8] = 3;
+  std::istringstream third_file(third);
+  ASSERT_TRUE(readState(third_file, read, reason)) << reason;
+  EXPECT_EQ(read.chosen_substeps, state.chosen_substeps);
+  EXPECT_TRUE(read.rope_orientations.empty());
 
   std::istringstream trailing(bytes + "x");
   EXPECT_FALSE(readState(trailing, read, reason));

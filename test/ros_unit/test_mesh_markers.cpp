@@ -97,5 +97,40 @@ TEST(MeshMarkers, APlanesSquareIsCentredBelowTheClothAsBuilt) {
   std::remove(obj.c_str());
 }
 
+// A rope is drawn as a LINE_STRIP through its own particles, as thick as it is; granular
+// particles after it keep their own marker, without the rope's particles.
+TEST(MeshMarkers, RopesAreLineStripsThroughTheirParticles) {
+  SceneConfig scene = flatCloth(Vec3::Zero());
+  RopeConfig rope;
+  rope.name = "cable";
+  rope.start = Vec3(0.0, 1.0, 1.0);
+  rope.end = Vec3(1.0, 1.0, 1.0);
+  rope.segments = 10;
+  rope.radius = 0.004;
+  scene.ropes = {rope};
+  scene.granular.count = 3;
+  scene.granular.radius = 0.01;
+  scene.granular.region_min = Vec3(0.0, -1.0, 0.5);
+  scene.granular.region_max = Vec3(0.2, -0.8, 0.7);
+  const Simulation sim(scene);
+  visualization_msgs::MarkerArray markers;
+  RosConversions::toParticleMarkers(sim, std_msgs::Header(), markers);
+  int lines = 0, granular_points = -1;
+  for (const auto& marker : markers.markers) {
+    if (marker.ns == "ropes") {
+      ++lines;
+      EXPECT_EQ(marker.type, visualization_msgs::Marker::LINE_STRIP);
+      ASSERT_EQ(marker.points.size(), 11u);
+      EXPECT_DOUBLE_EQ(marker.scale.x, 0.008);
+      EXPECT_DOUBLE_EQ(marker.points[10].x, 1.0);
+      EXPECT_DOUBLE_EQ(marker.points[10].y, 1.0);
+    } else if (marker.ns == "particles" && marker.id == 1) {
+      granular_points = static_cast<int>(marker.points.size());
+    }
+  }
+  EXPECT_EQ(lines, 1);
+  EXPECT_EQ(granular_points, 3);
+}
+
 }  // namespace
 }  // namespace pbd_cloth

@@ -14,6 +14,7 @@
 
 #include "pbd_cloth/config/obstacle_config.h"
 #include "pbd_cloth/config/robot_model.h"
+#include "pbd_cloth/config/rope_config.h"
 #include "pbd_cloth/geometry/pose.h"
 #include "pbd_cloth/solver/solver_settings.h"
 
@@ -153,6 +154,9 @@ struct SceneConfig {
   SolverConfig solver;
   ClothConfig cloth;
   GranularConfig granular;
+  // ropes: Cosserat rods, their particles numbered after the cloth's (and before the granular
+  // ones), each rope's in order.
+  std::vector<RopeConfig> ropes;
   std::vector<GripperConfig> grippers;
   BoundsConfig bounds;
   std::vector<ObstacleConfig> obstacles;

@@ -55,6 +55,10 @@ struct Rod {
   Vec3Array stretch_shear_lambda, bend_twist_lambda;
   RodStiffness stiffness;
   double radius = 0.0;
+  // In a scene: the index of particle 0 among the Simulation's particles (the cloth's, then each
+  // rope's in order). The step works on those particles; position, velocity and the masses here
+  // are the rope's own copy only for a rod stepped alone (stepRod).
+  int first_particle = 0;
 
   int segments() const { return static_cast<int>(orientation.size()); }
   int size() const { return static_cast<int>(position.size()); }
@@ -63,8 +67,12 @@ struct Rod {
   void fixSegment(int i);
 };
 
-// A straight rod from `start` to `end` in `segments` equal segments at rest, d1 the direction
-// of `up` x tangent (any perpendicular when they are parallel).
+// A rod placed through `points` (at least 2): each segment's d3 along it, the frames carried from
+// one segment to the next by the smallest rotation (parallel transport: no twist), the first one's
+// d1 whatever the shortest rotation from e_z gives. At rest it is straight and untwisted (rest
+// Darboux vectors zero: a rope keeps no bend), each segment as long as placed.
+Rod makeRod(const Vec3Array& points, const RodMaterial& material);
+// A straight rod from `start` to `end` in `segments` equal segments.
 Rod makeStraightRod(const Vec3& start, const Vec3& end, int segments, const RodMaterial& material);
 
 // The Darboux vector of joint k now: (2 / lbar) Im(conj(q_k) q_{k+1}), the shorter rotation.

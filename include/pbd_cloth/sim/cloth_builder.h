@@ -5,12 +5,16 @@
 #include "pbd_cloth/config/cloth_placement.h"
 #include "pbd_cloth/config/scene_config.h"
 #include "pbd_cloth/model/particles.h"
+#include "pbd_cloth/model/rod.h"
 
 namespace pbd_cloth {
 
 // Fills `particles` (cloth grid, then granular lattice) and `topology` from the scene. Pinned
 // particles get inverse mass 0.
 void buildScene(const SceneConfig& scene, Particles& particles, ClothTopology& topology);
+// The scene's ropes as rods (model/rod.h), their particles numbered from first_particle on (the
+// cloth's count), each rope's after the one before; pinned ends with inverse mass 0.
+std::vector<Rod> buildRopes(const SceneConfig& scene, int first_particle);
 
 // The bending hinges of the cloth's triangles (grid or mesh, as topology.from_mesh says), their
 // rest shape taken from `rest` (the particles' build positions); replaces any hinges there are.

@@ -45,6 +45,9 @@ class Simulation {
   double time() const { return time_; }
   const SceneConfig& scene() const { return scene_; }
   const Particles& particles() const { return particles_; }
+  // The scene's ropes (Cosserat rods; their particles are among particles(), from each one's
+  // first_particle on): orientations and angular velocities of their segments.
+  const std::vector<Rod>& ropes() const { return ropes_; }
   // Direct access for tools and tests that set up a disturbance (a kick, an initial overlap).
   Particles& mutableParticles() {
     state_measured_ = false;
@@ -222,7 +225,10 @@ class Simulation {
   FaultGuard fault_guard_;
   AccuracyController accuracy_;
   AccuracyReport accuracy_report_;
-  Particles redo_start_;  // the particles at the start of a step a target may run again
+  Particles redo_start_;    // the particles at the start of a step a target may run again
+  std::vector<Rod> ropes_;  // scene.ropes as rods (the solver steps them)
+  std::vector<Rod> ropes_redo_start_;  // at the start of a step a target may run again
+  std::vector<Rod> ropes_step_start_;  // at the start of the step, for the fault guard's undo
   Sleeping sleeping_;
 };
 

@@ -18,6 +18,13 @@ struct RodStepSettings {
   double damping = 0.0;  // 1/s, on linear and angular velocity alike
 };
 
+// The segments' part of a substep, which the cloth's solver runs for a scene's ropes around its own
+// prediction and velocity update of their particles: predict (orientation_start = q, omega *=
+// keep, q += h/2 (0, omega) q), and after the solve, omega = 2 Im(q conj(q_start)) / h.
+// Kinematic segments (both inverse inertias 0) stay as they are.
+void predictRodOrientations(Rod& rod, double h, double keep);
+void updateRodAngularVelocities(Rod& rod, double h);
+
 // `solver` holds the solve's room (RodSolver::prepare once for the rod: no allocation here).
 void stepRod(Rod& rod, double dt, const RodStepSettings& settings, RodSolver& solver);
 

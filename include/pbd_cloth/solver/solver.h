@@ -12,6 +12,7 @@
 #include "pbd_cloth/collision/collisions.h"
 #include "pbd_cloth/constraints/coarse_levels.h"
 #include "pbd_cloth/constraints/flat_hinges.h"
+#include "pbd_cloth/constraints/rod_constraints.h"
 #include "pbd_cloth/constraints/stretch_links.h"
 #include "pbd_cloth/model/particles.h"
 #include "pbd_cloth/parallel/thread_choice.h"
@@ -63,6 +64,10 @@ class Solver {
   void setSubsteps(int substeps) { config_.substeps = substeps; }
   // Sizes every buffer for these particles and constraints; call after the topology changes.
   void prepare(const Particles& particles, const ClothTopology& topology);
+  // The scene's ropes (Cosserat rods, model/rod.h), solved in every pass after the cloth's own
+  // constraints and before the contacts, on their particles among `p`; nullptr or empty: none.
+  // Sizes their solvers' room (outside the step).
+  void setRopes(std::vector<Rod>* ropes);
   // Gives Verlet its exact start (x_prev = x0 - v0 h + g h^2 / 2, REFERENCE_CASES.md case 1).
   void initializeVelocities(Particles& particles, double dt) const;
 
@@ -101,6 +106,8 @@ class Solver {
   bool flatBend(const ClothTopology& topology) const;
   void prepareBendStep(const Particles& p, const ClothTopology& topology, double h);
   double projectTethers(Particles& p, const ClothTopology& topology);
+  double projectRopes(double h, Particles& p, bool first_pass);
+  bool hasRopes() const { return ropes_ != nullptr && !ropes_->empty(); }
   void applyJacobi(Particles& p, double& max_change);
   void updateVelocities(double h, Particles& p);
   // The phases of step(), in its order.
@@ -132,12 +139,14 @@ class Solver {
   SolverConfig config_;
   double stretch_compliance_ = 0.0;
   double bend_compliance_ = -1.0;
-  double spacing_ = 0.0;                // cloth.spacing: the rest geometry of the coarse levels
-  CoarseLevels coarse_;                 // solver.levels; empty when off or the cloth is a mesh
-  std::vector<double> stretch_lambda_;  // XPBD multipliers, reset every substep
-  StretchLinks stretch_links_;          // topology.stretch in flat arrays and batches (prepare)
-  std::vector<double> link_lambda_;     // their multipliers in stretch_links_' order
-  ColumnPositions link_positions_;      // the particles' positions in columns during the sweep
+  double spacing_ = 0.0;                 // cloth.spacing: the rest geometry of the coarse levels
+  CoarseLevels coarse_;                  // solver.levels; empty when off or the cloth is a mesh
+  std::vector<double> stretch_lambda_;   // XPBD multipliers, reset every substep
+  std::vector<Rod>* ropes_ = nullptr;    // the Simulation's, or nullptr
+  std::vector<RodSolver> rope_solvers_;  // one per rope
+  StretchLinks stretch_links_;           // topology.stretch in flat arrays and batches (prepare)
+  std::vector<double> link_lambda_;      // their multipliers in stretch_links_' order
+  ColumnPositions link_positions_;       // the particles' positions in columns during the sweep
   // A step of links alone (linksAlone): the particles' velocities and substep starts in columns
   // beside link_positions_, which then hold the positions from the step's first prediction to its
   // last velocity update instead of being filled and emptied around every sweep.

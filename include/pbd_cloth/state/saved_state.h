@@ -62,14 +62,18 @@ struct SimulationState {
   // no target, or none chosen yet.
   int chosen_substeps = 0;
   int calm_steps = 0;  // the controller's count of steps well under the target (the same header)
+  // The ropes' segments (model/rod.h), every rope's in scene order: orientation (x y z w) and
+  // angular velocity (rad/s, world frame). Empty: no ropes.
+  std::vector<double> rope_orientations;  // 4 per segment
+  Vec3Array rope_angular_velocities;
 };
 
 // The state file: "PBDSTATE", a format version (uint32), then the fields in the order of
 // SimulationState, every number in the machine's own binary (IEEE doubles, little-endian on every
 // platform ROS supports): nothing is rounded, so a state read back is the state written.
-// Version 2 added search_window at the end, version 3 chosen_substeps and calm_steps after it;
-// older files still read (those fields 0).
-constexpr std::uint32_t kStateFileVersion = 3;
+// Version 2 added search_window at the end, version 3 chosen_substeps and calm_steps after it,
+// version 4 the ropes' segments after those; older files still read (those fields 0 or empty).
+constexpr std::uint32_t kStateFileVersion = 4;
 constexpr std::uint32_t kOldestStateFileVersion = 1;
 void writeState(std::ostream& out, const SimulationState& state);
 // False with the reason (wrong magic or version, truncated, implausible sizes) on a bad file;

@@ -160,6 +160,50 @@ void checkFriction(const std::string& key, const FrictionConfig& friction) {
   checkNumber(key + ".kinetic", friction.kinetic_coefficient, Range{0.0, mu_s, false, false});
 }
 
+// A rope: a name, at least one segment each longer than the rope's diameter (its particles are
+// contact spheres of its radius: neighbours must not touch), positive material constants.
+void validateRope(const std::string& key, const RopeConfig& r, std::set<std::string>& names) {
+  checkName(key + ".name", r.name, names);
+  if (!r.points.empty()) {
+    if (r.points.size() < 2) {
+      throw ConfigError(key + ".points",
+                        "at least 2 points, got " + std::to_string(r.points.size()));
+    }
+    for (std::size_t k = 0; k < r.points.size(); ++k)
+      checkFinite(indexed(key + ".points", k), r.points[k]);
+  } else {
+    checkFinite(key + ".start", r.start);
+    checkFinite(key + ".end", r.end);
+    checkInteger(key + ".segments", r.segments, 1, 100000);
+  }
+  checkNumber(key + ".radius", r.radius, kPositive);
+  checkNumber(key + ".density", r.density, kPositive);
+  checkNumber(key + ".young_modulus", r.young_modulus, kPositive);
+  checkNumber(key + ".shear_modulus", r.shear_modulus, kPositive);
+  if (!std::isfinite(r.stretch_compliance)) {
+    throw ConfigError(key + ".stretch_compliance", "a finite number (>= 0, or < 0: from E and G)");
+  }
+  const Vec3Array points = r.restPoints();
+  for (std::size_t s = 0; s + 1 < points.size(); ++s) {
+    const double length = (points[s + 1] - points[s]).norm();
+    if (!(length > 2.0 * r.radius)) {
+      throw ConfigError(key + (r.points.empty() ? ".segments" : ".points"),
+                        "segment " + std::to_string(s) + " is " + std::to_string(length) +
+                            " m long: each segment must be longer than the rope's diameter " +
+                            std::to_string(2.0 * r.radius) +
+                            " m (fewer segments, or a thinner rope)");
+    }
+  }
+  const int last = static_cast<int>(points.size()) - 1;
+  for (std::size_t k = 0; k < r.pinned.size(); ++k) {
+    if (r.pinned[k] < 0 || r.pinned[k] > last) {
+      throw ConfigError(indexed(key + ".pinned", k), "index " + std::to_string(r.pinned[k]) +
+                                                         " out of range [0, " +
+                                                         std::to_string(last) + "]");
+    }
+  }
+}
+
 void validateSolver(const SolverConfig& s) {
   checkInteger("solver.substeps", s.substeps, 1, kMaxPasses);
   checkInteger("solver.iterations", s.iterations, 1, kMaxPasses);
@@ -480,6 +524,14 @@ void validate(const SceneConfig& scene) {
   }
   validateGranular(scene.granular);
   std::set<std::string> names;
+  for (std::size_t k = 0; k < scene.ropes.size(); ++k) {
+    validateRope(indexed("ropes", k), scene.ropes[k], names);
+  }
+  if (!scene.ropes.empty() && scene.solver.method == Method::kMassSpring) {
+    throw ConfigError(
+        "solver.method",
+        "ropes are solved as position-based rods: use xpbd, pbd or verlet with ropes");
+  }
   for (std::size_t k = 0; k < scene.grippers.size(); ++k) {
     validateGripper(indexed("grippers", k), scene.grippers[k], names);
   }

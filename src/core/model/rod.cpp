@@ -36,43 +36,58 @@ void Rod::fixSegment(int i) {
   angular_velocity[i].setZero();
 }
 
-Rod makeStraightRod(const Vec3& start, const Vec3& end, int segments, const RodMaterial& material) {
+Rod makeRod(const Vec3Array& points, const RodMaterial& material) {
   Rod rod;
-  const int n = segments + 1;
-  const Vec3 tangent = (end - start).normalized();
-  const double length = (end - start).norm() / segments;
+  const int n = static_cast<int>(points.size());
+  const int segments = n - 1;
   const double area = kPi * material.radius * material.radius;
-  const double segment_mass = material.density * area * length;
-  rod.position.resize(n);
-  for (int i = 0; i < n; ++i) {
-    rod.position[i] = start + (end - start) * (static_cast<double>(i) / segments);
-  }
+  const double r2 = material.radius * material.radius;
+  rod.position = points;
   rod.velocity.assign(n, Vec3::Zero());
   rod.substep_start = rod.position;
   rod.mass.assign(n, 0.0);
+  rod.rest_length.resize(segments);
+  rod.orientation.resize(segments);
+  rod.inverse_inertia_bend.resize(segments);
+  rod.inverse_inertia_twist.resize(segments);
   for (int s = 0; s < segments; ++s) {
+    const Vec3 along = points[s + 1] - points[s];
+    const double length = along.norm();
+    const double segment_mass = material.density * area * length;
+    rod.rest_length[s] = length;
     rod.mass[s] += 0.5 * segment_mass;
     rod.mass[s + 1] += 0.5 * segment_mass;
+    // A solid cylinder of the segment's length: m (3 r^2 + l^2) / 12 about a diameter through its
+    // middle, m r^2 / 2 about its axis.
+    rod.inverse_inertia_bend[s] = 12.0 / (segment_mass * (3.0 * r2 + length * length));
+    rod.inverse_inertia_twist[s] = 2.0 / (segment_mass * r2);
+    const Vec3 tangent = along / length;
+    if (s == 0) {
+      rod.orientation[s] = Quaternion::FromTwoVectors(Vec3::UnitZ(), tangent).normalized();
+    } else {
+      const Vec3 previous = rod.orientation[s - 1] * Vec3::UnitZ();
+      rod.orientation[s] =
+          (Quaternion::FromTwoVectors(previous, tangent) * rod.orientation[s - 1]).normalized();
+    }
   }
   rod.inverse_mass.resize(n);
   for (int i = 0; i < n; ++i) rod.inverse_mass[i] = 1.0 / rod.mass[i];
-  // d3 along the rod; d1, d2 whatever the shortest rotation from e_z gives.
-  const Quaternion q = Quaternion::FromTwoVectors(Vec3::UnitZ(), tangent).normalized();
-  rod.orientation.assign(segments, q);
   rod.orientation_start = rod.orientation;
   rod.angular_velocity.assign(segments, Vec3::Zero());
-  rod.rest_length.assign(segments, length);
-  // A solid cylinder of the segment's length: m (3 r^2 + l^2) / 12 about a diameter through its
-  // middle, m r^2 / 2 about its axis.
-  const double r2 = material.radius * material.radius;
-  rod.inverse_inertia_bend.assign(segments, 12.0 / (segment_mass * (3.0 * r2 + length * length)));
-  rod.inverse_inertia_twist.assign(segments, 2.0 / (segment_mass * r2));
   rod.rest_darboux.assign(segments > 0 ? segments - 1 : 0, Vec3::Zero());
   rod.stretch_shear_lambda.assign(segments, Vec3::Zero());
   rod.bend_twist_lambda.assign(rod.rest_darboux.size(), Vec3::Zero());
   rod.stiffness = rodStiffness(material);
   rod.radius = material.radius;
   return rod;
+}
+
+Rod makeStraightRod(const Vec3& start, const Vec3& end, int segments, const RodMaterial& material) {
+  Vec3Array points(segments + 1);
+  for (int i = 0; i <= segments; ++i) {
+    points[i] = start + (end - start) * (static_cast<double>(i) / segments);
+  }
+  return makeRod(points, material);
 }
 
 Vec3 darbouxVector(const Rod& rod, int k) {

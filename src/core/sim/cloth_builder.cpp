@@ -330,12 +330,33 @@ bool makeBendConstraint(const Vec3Array& rest, int i0, int i1, int i2, int i3,
   return true;
 }
 
+std::vector<Rod> buildRopes(const SceneConfig& scene, int first_particle) {
+  std::vector<Rod> ropes;
+  for (const RopeConfig& config : scene.ropes) {
+    RodMaterial material;
+    material.radius = config.radius;
+    material.density = config.density;
+    material.young_modulus = config.young_modulus;
+    material.shear_modulus = config.shear_modulus;
+    material.stretch_compliance = config.stretch_compliance;
+    Rod rope = makeRod(config.restPoints(), material);
+    rope.first_particle = first_particle;
+    for (int index : config.pinned) rope.fixParticle(index);
+    first_particle += rope.size();
+    ropes.push_back(std::move(rope));
+  }
+  return ropes;
+}
+
 void buildScene(const SceneConfig& scene, Particles& particles, ClothTopology& topology) {
   const ClothConfig& cloth = scene.cloth;
   const GranularConfig& granular = scene.granular;
   const ClothMesh* mesh = cloth.mesh.empty() ? nullptr : cloth.mesh_data.get();
   const int cloth_count = mesh ? static_cast<int>(mesh->vertices.size()) : cloth.rows * cloth.cols;
-  particles.resize(cloth_count + granular.count);
+  const std::vector<Rod> ropes = buildRopes(scene, cloth_count);
+  int rope_count = 0;
+  for (const Rod& rope : ropes) rope_count += rope.size();
+  particles.resize(cloth_count + rope_count + granular.count);
   particles.cloth_count = cloth_count;
   topology = ClothTopology();
 
@@ -357,6 +378,14 @@ void buildScene(const SceneConfig& scene, Particles& particles, ClothTopology& t
     }
   }
   for (const auto& [index, kg] : cloth.point_masses) particles.mass[index] = kg;
+  for (const Rod& rope : ropes) {
+    for (int k = 0; k < rope.size(); ++k) {
+      const int i = rope.first_particle + k;
+      particles.position[i] = rope.position[k];
+      particles.mass[i] = rope.mass[k];
+      particles.radius[i] = rope.radius;
+    }
+  }
 
   // Granular particles on a simple cubic lattice of pitch 2.2 r inside the region, filled x first.
   const double pitch = 2.2 * granular.radius;
@@ -364,7 +393,7 @@ void buildScene(const SceneConfig& scene, Particles& particles, ClothTopology& t
   const int nx = std::max(1, static_cast<int>(extent.x() / pitch));
   const int ny = std::max(1, static_cast<int>(extent.y() / pitch));
   for (int k = 0; k < granular.count; ++k) {
-    const int i = cloth_count + k;
+    const int i = cloth_count + rope_count + k;
     const int ix = k % nx, iy = (k / nx) % ny, iz = k / (nx * ny);
     particles.position[i] = granular.region_min +
                             Vec3(granular.radius, granular.radius, granular.radius) +
@@ -375,6 +404,11 @@ void buildScene(const SceneConfig& scene, Particles& particles, ClothTopology& t
 
   for (int i = 0; i < particles.size(); ++i) particles.inverse_mass[i] = 1.0 / particles.mass[i];
   for (int index : cloth.pinned) particles.inverse_mass[index] = 0.0;
+  for (std::size_t r = 0; r < ropes.size(); ++r) {
+    for (int index : scene.ropes[r].pinned) {
+      particles.inverse_mass[ropes[r].first_particle + index] = 0.0;
+    }
+  }
   particles.substep_start = particles.position;
   particles.step_start = particles.position;
   particles.kinematic_from = particles.position;

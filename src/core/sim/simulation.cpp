@@ -56,6 +56,10 @@ void Simulation::build() {
   accuracy_report_ = AccuracyReport();
   redo_start_ = particles_;  // sized once: a step copies into it without allocating
   solver_.prepare(particles_, topology_);
+  ropes_ = buildRopes(scene_, particles_.cloth_count);
+  ropes_redo_start_ = ropes_;  // sized once: steps copy into them without allocating
+  ropes_step_start_ = ropes_;
+  solver_.setRopes(&ropes_);
   collisions_.prepare(particles_, topology_);
   collisions_.rememberStepStart();  // sizes its buffer
   solver_.mutableStats() = StepStats();
@@ -276,6 +280,7 @@ void Simulation::step(double dt) {
 
 void Simulation::stepAwake(double dt, bool targets_set) {
   fault_guard_.rememberStart(particles_);
+  ropes_step_start_ = ropes_;  // same sizes: no allocation
   if (!targets_set) moveKinematicBodies(dt);
   const double max_speed = scene_.solver.max_speed;
   fault_guard_.injectBeforeSolve(particles_, max_speed, dt);
@@ -286,6 +291,13 @@ void Simulation::stepAwake(double dt, bool targets_set) {
   time_ += dt;
   fault_guard_.clearLastStepRestored();
   const bool undone = fault_guard_.checkStep(particles_, max_speed, time_);
+  if (undone) {
+    // The ropes' segments go back with their particles, at rest as the particles are.
+    ropes_ = ropes_step_start_;
+    for (Rod& rope : ropes_) {
+      for (Vec3& omega : rope.angular_velocity) omega.setZero();
+    }
+  }
   state_measured_ = false;
   if (!undone) sleeping_.update(scene_.solver, particles_, collisions_, dt);
 }
@@ -305,6 +317,7 @@ void Simulation::solveStep(double dt) {
   report.target_max_strain = accuracy_.targetStrain();
   report.target_penetration = accuracy_.targetPenetration();
   redo_start_ = particles_;  // same sizes: no allocation
+  ropes_redo_start_ = ropes_;
   collisions_.rememberStepStart();
   report.substeps_run = 0;
   for (int attempt = 0;; ++attempt) {
@@ -319,6 +332,7 @@ void Simulation::solveStep(double dt) {
     const double ratio = accuracy_.ratio(report.structural_max_strain, report.max_penetration);
     if (accuracy_.redo(ratio, attempt)) {
       particles_ = redo_start_;
+      ropes_ = ropes_redo_start_;
       collisions_.restoreStepStart();
       solver_.mutableStats().sim_time -= dt;
       continue;

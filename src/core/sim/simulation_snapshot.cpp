@@ -94,6 +94,15 @@ void Simulation::getState(SimulationState& state) const {
   state.search_window = collisions_.adaptiveSearchWindow();
   state.chosen_substeps = accuracy_.active() ? accuracy_.substeps() : 0;
   state.calm_steps = accuracy_.active() ? accuracy_.calmSteps() : 0;
+  state.rope_orientations.clear();
+  state.rope_angular_velocities.clear();
+  for (const Rod& rope : ropes_) {
+    for (int s = 0; s < rope.segments(); ++s) {
+      const Quaternion& q = rope.orientation[s];
+      state.rope_orientations.insert(state.rope_orientations.end(), {q.x(), q.y(), q.z(), q.w()});
+      state.rope_angular_velocities.push_back(rope.angular_velocity[s]);
+    }
+  }
 }
 
 std::string Simulation::checkState(const SimulationState& state) const {
@@ -169,6 +178,23 @@ std::string Simulation::checkState(const SimulationState& state) const {
     error = "chosen_substeps: " + std::to_string(state.chosen_substeps) + " is not in [0, " +
             std::to_string(kMaxPasses) + "]";
   }
+  std::size_t segments = 0;
+  for (const Rod& rope : ropes_) segments += rope.segments();
+  if (error.empty() && (state.rope_orientations.size() != 4 * segments ||
+                        state.rope_angular_velocities.size() != segments)) {
+    error = "rope_orientations / rope_angular_velocities: " +
+            std::to_string(state.rope_orientations.size() / 4) + " / " +
+            std::to_string(state.rope_angular_velocities.size()) +
+            " segments, the scene's ropes have " + std::to_string(segments);
+  }
+  for (std::size_t k = 0; error.empty() && k < state.rope_orientations.size(); k += 4) {
+    const Eigen::Vector4d q(state.rope_orientations[k], state.rope_orientations[k + 1],
+                            state.rope_orientations[k + 2], state.rope_orientations[k + 3]);
+    if (!q.allFinite() || std::abs(q.norm() - 1.0) > 1e-6 ||
+        !state.rope_angular_velocities[k / 4].allFinite()) {
+      error = at("rope_orientations", k / 4) + ": not a finite unit quaternion and velocity";
+    }
+  }
   for (std::size_t c = 0; error.empty() && c < state.mesh_contacts.size(); ++c) {
     const MeshContactCache& cache = state.mesh_contacts[c];
     const std::string field = at("mesh_contacts", c);
@@ -220,6 +246,15 @@ bool Simulation::setState(const SimulationState& state, std::string& reason) {
     links_[l].target = from.target;
     links_[l].live = from.live;
     links_[l].enabled = from.enabled;
+  }
+  std::size_t segment = 0;
+  for (Rod& rope : ropes_) {
+    for (int s = 0; s < rope.segments(); ++s, ++segment) {
+      const double* q = &state.rope_orientations[4 * segment];
+      rope.orientation[s] = Quaternion(q[3], q[0], q[1], q[2]);
+      rope.orientation_start[s] = rope.orientation[s];
+      rope.angular_velocity[s] = state.rope_angular_velocities[segment];
+    }
   }
   collisions_.setMeshContacts(state.mesh_contacts);
   collisions_.setAdaptiveSearchWindow(state.search_window);

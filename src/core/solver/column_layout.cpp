@@ -14,7 +14,7 @@ bool Solver::linksAlone(const Particles& p, const ClothTopology& topology,
                         const Collisions& collisions) const {
   return config_.method != Method::kMassSpring && config_.ordering != Ordering::kJacobi &&
          fastStretch(topology) && link_positions_.size() == p.size() && bend_compliance_ < 0.0 &&
-         topology.tethers.empty() && collisions.touchesNoParticle(p, topology);
+         topology.tethers.empty() && !hasRopes() && collisions.touchesNoParticle(p, topology);
 }
 
 void Solver::stateToColumns(const Particles& p) {

@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "pbd_cloth/constraints/tether_projection.h"
+#include "pbd_cloth/solver/rod_stepper.h"
 #include "pbd_cloth/solver/scoped_timer.h"
 
 namespace pbd_cloth {
@@ -21,12 +22,19 @@ void Solver::projectSubstep(double h, Particles& p, const ClothTopology& topolog
   }
   // The flat hinges' first pass writes theirs (projectFlatHinges, lambda_from_zero).
   if (!flatBend(topology)) std::fill(bend_lambda_.begin(), bend_lambda_.end(), Vec3::Zero());
+  // The ropes' segments: their orientations predicted as the particles were (rod_stepper.h).
+  if (hasRopes()) {
+    for (Rod& rope : *ropes_) predictRodOrientations(rope, h, dampingFactor(h));
+  }
   for (int pass = 0; pass < config_.iterations; ++pass) {
     ++stats_.iterations;
     const double max_change =
         projectPass(h, p, topology, collisions, pass == 0, pass + 1 == config_.iterations);
     // Adaptive count (seed: "measuring the change from last iteration").
     if (tracksLargestChange() && max_change < config_.tolerance) break;
+  }
+  if (hasRopes()) {
+    for (Rod& rope : *ropes_) updateRodAngularVelocities(rope, h);
   }
   addMultiplierReactions(p, topology);
 }
@@ -49,6 +57,7 @@ double Solver::projectPass(double h, Particles& p, const ClothTopology& topology
   max_change = std::max(max_change, projectBend(h, p, topology, first_pass, last_pass));
   if (config_.ordering == Ordering::kJacobi) applyJacobi(p, max_change);
   max_change = std::max(max_change, projectTethers(p, topology));
+  if (hasRopes()) max_change = std::max(max_change, projectRopes(h, p, first_pass));
   // Contacts last in each pass so the positions a pass ends with are free of penetration.
   // Timed on their own: the narrow phase is the part of a pass a scene's collisions add.
   ScopedTimer timer(stats_.contact_time);
@@ -105,6 +114,31 @@ double Solver::projectTethers(Particles& p, const ClothTopology& topology) {
                                         p.position, p.inverse_mass, reaction_, first_round));
   }
   return std::max(max_change, std::sqrt(max_change_squared));
+}
+
+// The ropes: each one direct solve of its rod (rod_constraints.h) on its particles, copied out of
+// and back into `p` around it (a rope's particles are contiguous); held particles are those with
+// inverse mass 0 now. Multipliers start at zero in the substep's first pass.
+double Solver::projectRopes(double h, Particles& p, bool first_pass) {
+  double max_change = 0.0;
+  for (std::size_t r = 0; r < ropes_->size(); ++r) {
+    Rod& rope = (*ropes_)[r];
+    const int first = rope.first_particle;
+    for (int k = 0; k < rope.size(); ++k) {
+      rope.position[k] = p.position[first + k];
+      rope.inverse_mass[k] = p.inverse_mass[first + k];
+    }
+    if (first_pass) {
+      for (Vec3& lambda : rope.stretch_shear_lambda) lambda.setZero();
+      for (Vec3& lambda : rope.bend_twist_lambda) lambda.setZero();
+    }
+    rope_solvers_[r].solve(rope, h);
+    for (int k = 0; k < rope.size(); ++k) {
+      max_change = std::max(max_change, (rope.position[k] - p.position[first + k]).norm());
+      p.position[first + k] = rope.position[k];
+    }
+  }
+  return max_change;
 }
 
 // Jacobi: every correction of a pass was computed from the same positions and is applied here at

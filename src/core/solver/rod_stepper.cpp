@@ -7,6 +7,34 @@
 
 namespace pbd_cloth {
 
+namespace {
+bool kinematic(const Rod& rod, int s) {
+  return rod.inverse_inertia_bend[s] == 0.0 && rod.inverse_inertia_twist[s] == 0.0;
+}
+}  // namespace
+
+void predictRodOrientations(Rod& rod, double h, double keep) {
+  for (int s = 0; s < rod.segments(); ++s) {
+    rod.orientation_start[s] = rod.orientation[s];
+    if (kinematic(rod, s)) continue;
+    rod.angular_velocity[s] *= keep;
+    const Vec3& omega = rod.angular_velocity[s];
+    Quaternion& q = rod.orientation[s];
+    const Quaternion spin(0.0, 0.5 * h * omega.x(), 0.5 * h * omega.y(), 0.5 * h * omega.z());
+    q.coeffs() += (spin * q).coeffs();
+    q.normalize();
+  }
+}
+
+void updateRodAngularVelocities(Rod& rod, double h) {
+  for (int s = 0; s < rod.segments(); ++s) {
+    if (kinematic(rod, s)) continue;
+    Quaternion turn = rod.orientation[s] * rod.orientation_start[s].conjugate();
+    if (turn.w() < 0.0) turn.coeffs() = -turn.coeffs();
+    rod.angular_velocity[s] = (2.0 / h) * turn.vec();
+  }
+}
+
 void stepRod(Rod& rod, double dt, const RodStepSettings& settings, RodSolver& solver) {
   const double h = dt / settings.substeps;
   const double keep = velocityKept(settings.damping, h);
@@ -17,16 +45,7 @@ void stepRod(Rod& rod, double dt, const RodStepSettings& settings, RodSolver& so
       rod.velocity[i] = keep * rod.velocity[i] + h * settings.gravity;
       rod.position[i] += h * rod.velocity[i];
     }
-    for (int s = 0; s < rod.segments(); ++s) {
-      rod.orientation_start[s] = rod.orientation[s];
-      if (rod.inverse_inertia_bend[s] == 0.0 && rod.inverse_inertia_twist[s] == 0.0) continue;
-      rod.angular_velocity[s] *= keep;
-      const Vec3& omega = rod.angular_velocity[s];
-      Quaternion& q = rod.orientation[s];
-      const Quaternion spin(0.0, 0.5 * h * omega.x(), 0.5 * h * omega.y(), 0.5 * h * omega.z());
-      q.coeffs() += (spin * q).coeffs();
-      q.normalize();
-    }
+    predictRodOrientations(rod, h, keep);
     for (Vec3& lambda : rod.stretch_shear_lambda) lambda.setZero();
     for (Vec3& lambda : rod.bend_twist_lambda) lambda.setZero();
     solver.solve(rod, h);
@@ -34,12 +53,7 @@ void stepRod(Rod& rod, double dt, const RodStepSettings& settings, RodSolver& so
       if (rod.inverse_mass[i] == 0.0) continue;
       rod.velocity[i] = (rod.position[i] - rod.substep_start[i]) / h;
     }
-    for (int s = 0; s < rod.segments(); ++s) {
-      if (rod.inverse_inertia_bend[s] == 0.0 && rod.inverse_inertia_twist[s] == 0.0) continue;
-      Quaternion turn = rod.orientation[s] * rod.orientation_start[s].conjugate();
-      if (turn.w() < 0.0) turn.coeffs() = -turn.coeffs();
-      rod.angular_velocity[s] = (2.0 / h) * turn.vec();
-    }
+    updateRodAngularVelocities(rod, h);
   }
 }
 

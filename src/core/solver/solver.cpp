@@ -64,6 +64,14 @@ void Solver::prepare(const Particles& particles, const ClothTopology& topology) 
   }
 }
 
+void Solver::setRopes(std::vector<Rod>* ropes) {
+  ropes_ = ropes;
+  rope_solvers_.assign(ropes ? ropes->size() : 0, RodSolver());
+  for (std::size_t r = 0; r < rope_solvers_.size(); ++r) {
+    rope_solvers_[r].prepare((*ropes)[r].segments());
+  }
+}
+
 void Solver::initializeVelocities(Particles& particles, double dt) const {
   if (config_.method != Method::kVerlet) return;
   // Position Verlet stores the half-step velocity (x_n - x_{n-1}) / h. Starting it at

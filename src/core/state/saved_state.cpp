@@ -182,6 +182,9 @@ void writeSolverPart(ByteWriter& w, const SimulationState& state) {
   w.index(state.search_window);
   w.index(state.chosen_substeps);
   w.index(state.calm_steps);
+  w.count(state.rope_orientations.size());
+  for (double value : state.rope_orientations) w.raw(value);
+  w.vecs(state.rope_angular_velocities);
 }
 
 void readSolverPart(ByteReader& r, SimulationState& state) {
@@ -198,6 +201,11 @@ void readSolverPart(ByteReader& r, SimulationState& state) {
   if (r.version() >= 3) {
     state.chosen_substeps = r.index("chosen_substeps");
     state.calm_steps = r.index("calm_steps");
+  }
+  if (r.version() >= 4) {
+    state.rope_orientations.resize(r.count("rope_orientations", sizeof(double)));
+    for (double& value : state.rope_orientations) value = r.raw<double>("rope orientation");
+    state.rope_angular_velocities = r.vecs("rope_angular_velocities");
   }
 }
 
@@ -332,6 +340,8 @@ bool decodeSolverData(const std::vector<std::uint8_t>& data, SimulationState& st
   state.search_window = read.search_window;
   state.chosen_substeps = read.chosen_substeps;
   state.calm_steps = read.calm_steps;
+  state.rope_orientations = std::move(read.rope_orientations);
+  state.rope_angular_velocities = std::move(read.rope_angular_velocities);
   return true;
 }
 
