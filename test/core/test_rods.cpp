@@ -35,6 +35,18 @@ Rod clampedRod(double length, int segments, const RodMaterial& material) {
   return rod;
 }
 
+// Steps a rod `steps` steps of 1/60 s at `substeps` substeps with damping (to come to rest).
+void settle(Rod& rod, int steps, int substeps, double damping,
+            const Vec3& gravity = Vec3(0.0, 0.0, -9.81)) {
+  RodStepSettings settings;
+  settings.substeps = substeps;
+  settings.damping = damping;
+  settings.gravity = gravity;
+  RodSolver solver;
+  solver.prepare(rod.segments());
+  for (int k = 0; k < steps; ++k) stepRod(rod, 1.0 / 60.0, settings, solver);
+}
+
 // A cantilever under its own weight q = rho A g: tip deflection q L^4 / (8 E I) for small
 // deflection (Euler-Bernoulli; shear adds q L^2 / (2 kappa G A), 1e-6 of it here), within 3 %,
 // once the damped rod has come to rest.
@@ -49,12 +61,7 @@ TEST(Rods, CantileverTipDeflectionIsEulerBernoullis) {
     double first = 0.0;
     for (int substeps : {5, 20}) {
       Rod rod = clampedRod(length, segments, material);
-      RodStepSettings settings;
-      settings.substeps = substeps;
-      settings.damping = 20.0;
-      RodSolver solver;
-      solver.prepare(rod.segments());
-      for (int k = 0; k < 240; ++k) stepRod(rod, 1.0 / 60.0, settings, solver);
+      settle(rod, 240, substeps, 20.0);
       const double deflection = 1.0 - rod.position.back().z();
       std::printf(
           "%d segments: tip deflection %.6f m, Euler-Bernoulli %.6f m (%.2f %%), tip speed "
@@ -117,12 +124,7 @@ TEST(Rods, DroopingCantileverFollowsTheElastica) {
   const double bend_stiffness = material.young_modulus * kPi * std::pow(material.radius, 4) / 4.0;
   const double expected = elasticaTipDrop(q, bend_stiffness, length);
   Rod rod = clampedRod(length, 40, material);
-  RodStepSettings settings;
-  settings.substeps = 10;
-  settings.damping = 10.0;
-  RodSolver solver;
-  solver.prepare(rod.segments());
-  for (int k = 0; k < 600; ++k) stepRod(rod, 1.0 / 60.0, settings, solver);
+  settle(rod, 600, 10, 10.0);
   const double drop = 1.0 - rod.position.back().z();
   std::printf(
       "q L^3 / EI = %.3g: tip drop %.5f m, elastica %.5f m (%.2f %%), linear theory %.4f m; "
@@ -152,13 +154,7 @@ TEST(Rods, TwistedRodCarriesGJThetaOverL) {
   const Vec3 axis = Vec3::UnitX();
   rod.orientation.back() =
       (Quaternion(Eigen::AngleAxisd(theta, axis)) * rod.orientation.back()).normalized();
-  RodStepSettings settings;
-  settings.substeps = 10;
-  settings.damping = 20.0;
-  settings.gravity.setZero();
-  RodSolver solver;
-  solver.prepare(rod.segments());
-  for (int k = 0; k < 240; ++k) stepRod(rod, 1.0 / 60.0, settings, solver);
+  settle(rod, 240, 10, 20.0, Vec3::Zero());
   const double polar_moment = kPi * std::pow(material.radius, 4) / 2.0;
   const double expected = material.shear_modulus * polar_moment * theta / length;
   double smallest = 1e300, largest = 0.0, most_bending = 0.0;
