@@ -123,7 +123,8 @@ TEST(Ropes, SavedStateContinuesBitForBit) {
 }
 
 // Refused with the key: a rope whose segments are no longer than its diameter, a pin past its
-// end, no name, and ropes with the explicit springs (they are position-based rods).
+// end, no name, a rope that starts outside the bounds (its first particle out: 11 of 20, at z =
+// 2.1), and ropes with the explicit springs (they are position-based rods).
 TEST(Ropes, BadRopesNameTheirKey) {
   struct Case {
     std::string rope, key, says;
@@ -146,6 +147,15 @@ TEST(Ropes, BadRopesNameTheirKey) {
       EXPECT_NE(std::string(e.what()).find(c.key), std::string::npos) << e.what();
       EXPECT_NE(std::string(e.what()).find(c.says), std::string::npos) << e.what();
     }
+  }
+  try {
+    validate(sceneFrom(withRope("  - {name: r, start: [0, 0, 1], end: [0, 0, 3]}\n",
+                                "bounds: {min: [-1, -1, -1], max: [6, 6, 2]}\n")));
+    ADD_FAILURE() << "a rope leaving the bounds was accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("ropes[0] must start inside the bounds: its particle 11"),
+              std::string::npos)
+        << e.what();
   }
   SceneConfig springs = sceneFrom(withRope("  - {name: r}\n"));
   springs.solver.method = Method::kMassSpring;

@@ -503,6 +503,23 @@ void checkClothInsideBounds(const SceneConfig& scene) {
   }
 }
 
+// A rope outside the bounds would be pushed in at its first step, not where the scene put it.
+void checkRopesInsideBounds(const SceneConfig& scene) {
+  const Eigen::Vector3d lo = scene.bounds.min.array() - 1e-9, hi = scene.bounds.max.array() + 1e-9;
+  for (std::size_t r = 0; r < scene.ropes.size(); ++r) {
+    const Vec3Array points = scene.ropes[r].restPoints();
+    for (std::size_t k = 0; k < points.size(); ++k) {
+      const Eigen::Vector3d& x = points[k];
+      if ((x.array() >= lo.array()).all() && (x.array() <= hi.array()).all()) continue;
+      throw ConfigError(
+          "bounds", "ropes[" + std::to_string(r) + "] must start inside the bounds: its particle " +
+                        std::to_string(k) + " is at " + formatVector(x) + ", outside min " +
+                        formatVector(scene.bounds.min) + ", max " + formatVector(scene.bounds.max) +
+                        " (move the rope or widen the bounds)");
+    }
+  }
+}
+
 }  // namespace
 
 void validate(const SceneConfig& scene) {
@@ -552,6 +569,7 @@ void validate(const SceneConfig& scene) {
                                       formatVector(scene.bounds.max));
     }
     checkClothInsideBounds(scene);
+    checkRopesInsideBounds(scene);
   }
 }
 
