@@ -5,6 +5,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
@@ -120,6 +121,30 @@ TEST(Ropes, SavedStateContinuesBitForBit) {
   EXPECT_EQ(loaded.particles().position, straight.particles().position);
   EXPECT_EQ(loaded.ropes()[0].orientation, straight.ropes()[0].orientation);
   EXPECT_GT(straight.ropes()[0].angular_velocity[10].norm(), 0.0);  // it swung: there was a state
+}
+
+// A rope clamped by pinning its first two particles, inextensible: the first segment's stretch
+// has no free end and no compliance (a row of nothing to solve), and the rope still hangs, finite,
+// its segments at their length.
+TEST(Ropes, InextensibleRopePinnedAtTwoNeighboursHangs) {
+  const SceneConfig scene =
+      sceneFrom(withRope("  - {name: r, start: [0, 0, 1], end: [0.5, 0, 1], segments: 10, "
+                         "stretch_compliance: 0, pinned: [0, 1]}\n"));
+  Simulation sim(scene);
+  for (int k = 0; k < 60; ++k) sim.step();
+  const Rod& rope = sim.ropes()[0];
+  double worst = 0.0;
+  for (int s = 0; s < rope.segments(); ++s) {
+    const Vec3& a = sim.particles().position[rope.first_particle + s];
+    const Vec3& b = sim.particles().position[rope.first_particle + s + 1];
+    worst = std::max(worst, std::abs((b - a).norm() / rope.rest_length[s] - 1.0));
+  }
+  const Vec3& tip = sim.particles().position[rope.first_particle + 10];
+  std::printf("rope pinned at two neighbours: tip at z = %.4f m, worst stretch %.3g\n", tip.z(),
+              worst);
+  ASSERT_TRUE(tip.allFinite());
+  EXPECT_LT(tip.z(), 0.9);  // it hangs
+  EXPECT_LT(worst, 1e-3);
 }
 
 // Refused with the key: a rope whose segments are no longer than its diameter, a pin past its

@@ -66,6 +66,13 @@ void RodSolver::solve(Rod& rod, double h) {
         ((wi + wj) / (l * l)) * Eigen::Matrix3d::Identity() + d3x * w_s * d3x.transpose() + alpha_s;
     const Vec3 c_s = (rod.position[s + 1] - rod.position[s]) / l - d3;
     rhs_[s].head<3>() = -c_s - alpha_s * rod.stretch_shear_lambda[s];
+    if (wi + wj == 0.0 && alpha_s.isZero(0.0) && !w_s.isZero(0.0)) {
+      // Both ends held and the rope inextensible: nothing changes the stretch along d3 (the
+      // segment's turn only moves d3 across itself). That row is left out: unit diagonal, nothing
+      // on the right, and no coupling (the others reach this block across d3 only).
+      d.topLeftCorner<3, 3>() += along;
+      rhs_[s].head<3>() -= along * rhs_[s].head<3>();
+    }
     if (s + 1 < n) {
       const double l_next = rod.rest_length[s + 1];
       const double lbar = 0.5 * (l + l_next);
