@@ -75,6 +75,10 @@ Rod makeRod(const Vec3Array& points, const RodMaterial& material);
 // A straight rod from `start` to `end` in `segments` equal segments.
 Rod makeStraightRod(const Vec3& start, const Vec3& end, int segments, const RodMaterial& material);
 
+// q <- normalize(q + 1/2 (0, rotation) q): a small rotation (world frame, rad) applied to an
+// orientation, as the solve's corrections and a substep's spin h omega are.
+void applySmallRotation(Quaternion& q, const Vec3& rotation);
+
 // The Darboux vector of joint k now: (2 / lbar) Im(conj(q_k) q_{k+1}), the shorter rotation.
 Vec3 darbouxVector(const Rod& rod, int joint);
 

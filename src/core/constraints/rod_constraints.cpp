@@ -17,13 +17,6 @@ Eigen::Matrix3d cross(const Vec3& v) {
 // 1 / stiffness, 0 for an infinitely stiff one.
 double compliance(double stiffness) { return std::isinf(stiffness) ? 0.0 : 1.0 / stiffness; }
 
-// q <- normalize(q + 1/2 (0, dtheta) q): a small rotation dtheta (world frame) applied to q.
-void rotate(Quaternion& q, const Vec3& dtheta) {
-  const Quaternion dq(0.0, 0.5 * dtheta.x(), 0.5 * dtheta.y(), 0.5 * dtheta.z());
-  q.coeffs() += (dq * q).coeffs();
-  q.normalize();
-}
-
 }  // namespace
 
 void RodSolver::prepare(int segments) {
@@ -152,7 +145,7 @@ void RodSolver::solve(Rod& rod, double h) {
     }
   }
   for (int s = 0; s < n; ++s) {
-    if (turn_[s].squaredNorm() > 0.0) rotate(rod.orientation[s], turn_[s]);
+    if (turn_[s].squaredNorm() > 0.0) applySmallRotation(rod.orientation[s], turn_[s]);
   }
 }
 

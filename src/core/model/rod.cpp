@@ -90,6 +90,12 @@ Rod makeStraightRod(const Vec3& start, const Vec3& end, int segments, const RodM
   return makeRod(points, material);
 }
 
+void applySmallRotation(Quaternion& q, const Vec3& rotation) {
+  const Quaternion dq(0.0, 0.5 * rotation.x(), 0.5 * rotation.y(), 0.5 * rotation.z());
+  q.coeffs() += (dq * q).coeffs();
+  q.normalize();
+}
+
 Vec3 darbouxVector(const Rod& rod, int k) {
   Quaternion relative = rod.orientation[k].conjugate() * rod.orientation[k + 1];
   if (relative.w() < 0.0) relative.coeffs() = -relative.coeffs();  // the shorter rotation

@@ -280,7 +280,8 @@ void Simulation::step(double dt) {
 
 void Simulation::stepAwake(double dt, bool targets_set) {
   fault_guard_.rememberStart(particles_);
-  ropes_step_start_ = ropes_;  // same sizes: no allocation
+  // What the fault guard's undo restores the ropes' segments to (same sizes: no allocation).
+  if (fault_guard_.enabled()) ropes_step_start_ = ropes_;
   if (!targets_set) moveKinematicBodies(dt);
   const double max_speed = scene_.solver.max_speed;
   fault_guard_.injectBeforeSolve(particles_, max_speed, dt);

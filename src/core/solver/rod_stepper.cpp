@@ -18,11 +18,7 @@ void predictRodOrientations(Rod& rod, double h, double keep) {
     rod.orientation_start[s] = rod.orientation[s];
     if (kinematic(rod, s)) continue;
     rod.angular_velocity[s] *= keep;
-    const Vec3& omega = rod.angular_velocity[s];
-    Quaternion& q = rod.orientation[s];
-    const Quaternion spin(0.0, 0.5 * h * omega.x(), 0.5 * h * omega.y(), 0.5 * h * omega.z());
-    q.coeffs() += (spin * q).coeffs();
-    q.normalize();
+    applySmallRotation(rod.orientation[s], h * rod.angular_velocity[s]);
   }
 }
 
